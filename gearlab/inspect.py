@@ -73,7 +73,7 @@ from .gearbox.speed import (
 )
 from .gearbox.speed_course import speed_course, speed_shift
 from .inspect_axes import stronger_axis
-from .inspect_tacho import elsewhere_line, marks_line, shaft_and_marks, speed_channel
+from .inspect_tacho import elsewhere_line, marks_line, reversal_notes, shaft_and_marks, speed_channel
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho, upsampled
 from .signals.checks import fmt_hz
 from .signals.fixed_lines import fixed_on_orders, modulation_pairs, smear_merged
@@ -214,7 +214,7 @@ def _tacho_speed(rec: Recording, box: Gearbox | None, options: InspectOptions) -
     with prefixed(where):
         starts = revolution_starts(theta) if turns >= 2 else np.zeros(0)
     per_rev = rec.fs / np.diff(starts) if starts.size >= 2 else np.zeros(0)
-    return Speed(mean, how, theta, per_rev)
+    return Speed(mean, how, theta, per_rev, notes=reversal_notes(rec.signal, rec.fs, theta))  # stops, turns back?
 
 
 def _found_speed(rec: Recording, box: Gearbox | None, options: InspectOptions) -> Speed:

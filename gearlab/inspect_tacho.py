@@ -18,6 +18,8 @@ from .data.recordings import speed_channel_note
 from .errors import GearlabInputError
 from .gearbox import Gearbox, order_table
 from .gearbox.match import MIN_TEETH, STRONGEST, TACHO_SPEED_TOL, tacho_elsewhere, tacho_shaft_words, tol_mesh
+from .signals import resample_revolutions
+from .signals.checks import reversal, reversal_words, speed_varies, turn_times
 
 
 @contextmanager
@@ -31,6 +33,22 @@ def speed_channel(tacho: np.ndarray):
 
 
 MARKS = range(1, 9)  # the counts of marks a turn tried, as marks_line tries them
+
+
+def reversal_notes(signal: np.ndarray, fs: float, theta: np.ndarray) -> list[str]:
+    """inspect's note of a take whose shaft reverses (signals.checks.reversal), its input angle *theta* read off its
+    tacho: inspect reads a take whole, both ways in its spectrum and averages, where a detection run and `gearlab
+    score` keep one side (detection_in_band). [] where its speed is steady or it turns one way."""
+    if not speed_varies(theta, fs):
+        return []
+    found = reversal(resample_revolutions(signal, theta), turn_times(theta, fs))
+    if found is None:
+        return []
+    return [
+        f"{reversal_words(found)} (its turns after match those before mirrored or off the tacho's mark, which "
+        "counts turns either way): read whole here, both ways in its spectrum and averages; a detection run and "
+        "gearlab score keep the side of its longest run at a history's speed"
+    ]
 
 
 def _ratios(ppr: int | None) -> list[Fraction]:

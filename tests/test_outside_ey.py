@@ -351,3 +351,83 @@ def test_a_wheel_count_too_few_turns_tell_says_the_count_described_beside_the_re
     got = inspect_record(str(tmp_path / "take.csv"), load_gearbox(tmp_path / "box.toml"), InspectOptions("acc_ms2"))
     said = got["verdict"]
     assert "(74.0 ± 1.3 from its sidebands, 73 described: 65 input revolutions, need 91" in said, said
+
+
+# --- a shaft that stops and turns back within a take ------------------------------------------------------------------
+
+
+def _reversing(stand: float, seed: int):
+    """(time s, m/s², tacho V): _stopping's take whose shaft turns back after its stop: 24 Hz for 1.5 s, down to a
+    stop in 0.5 s, standing *stand* s, up to -24 Hz in 0.5 s, 2 s there; the same once-per-turn tacho, which pulses
+    on each mark's other edge turning back."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(int((4.5 + stand) * FS)) / FS
+    hz = np.interp(t, [0, 1.5, 2.0, 2.0 + stand, 2.5 + stand, 4.5 + stand], [24, 24, 0, 0, -24, -24])
+    shafts = [2 * np.pi * np.cumsum(hz) / FS + 0.2]
+    for zp, zw in STAGES:
+        shafts.append(shafts[-1] * zp / zw)
+    x = sum(0.12 / k * np.cos(k * a + 0.7 * k**2) for a in shafts for k in (1, 2, 3))
+    for i, (zp, _) in enumerate(STAGES):
+        for h, amp in ((1, 3.0), (2, 1.2), (3, 0.5)):
+            am = 1 + 0.06 * np.cos(shafts[i] + 0.4 * h) + 0.05 * np.cos(shafts[i + 1] + 0.9 * h)
+            x = x + amp / (i + 1) * am * np.cos(h * zp * shafts[i] + 0.3 * h * i)
+    x = x * (hz / 24) ** 2 + rng.normal(0, 0.08 * 2.4, t.size)
+    return t, x, np.where(np.mod(shafts[0], 2 * np.pi) < 0.35, 5.0, 0.0)
+
+
+def test_a_take_whose_shaft_turns_back_says_where_and_which_side_is_scored(tmp_path, box):
+    # 1.5 s forward, a 1 s stop, 2 s backward: a pulse tacho counts the turns back as turns on, and a run and gearlab
+    # score scored its longest steady stretch (the 48 turns back) as '48 of 95 revolutions at 24.00 .. 24.08 Hz',
+    # inspect its whole ('0.79 .. 24.05 Hz ...; stopped?'), with no word that it turned back
+    from gearlab.data.recordings import cut_recording
+    from gearlab.kinds.detection_in_band import in_band, steady
+
+    t, x, tacho = _reversing(1.0, 3)
+    _csv(tmp_path / "back.csv", "time_s,acc_ms2,tacho_V", t, x, tacho)
+    rec = cut_recording(str(tmp_path / "back.csv"), vibration="acc_ms2", tacho="tacho_V")
+    k, t0, t1 = rec.reverses
+    assert 1.9 < t0 < 2.0 and 3.1 < t1 < 3.3 and k - 1 == int(np.argmin(rec.speeds)), rec.reverses  # the stop's turn
+    where = f"after the shaft reverses in its turn of {t0:.3g} .. {t1:.3g} s"
+    scored = in_band(rec, {"24 Hz": 24.0}).said  # a test take, in a run and in gearlab score alike
+    assert scored.startswith("scored on 48 of 95 revolutions at 24.00 .. 24.08 Hz, " + where), scored
+    assert steady(rec).said == f"used 48 of 95 revolutions at 24.00 .. 24.08 Hz, {where} (steady part)"
+    got = inspect_record(str(tmp_path / "back.csv"), box, InspectOptions("acc_ms2", tacho="tacho_V"))
+    (note,) = got["speed"]["notes"]
+    assert note.startswith(f"the shaft reverses in its turn of {t0:.3g} .. {t1:.3g} s") and "read whole" in note, note
+    # a stop turning on the same way, and a steady take, say none
+    for ts, xs, ps in (_stopping(1.0, 5)[:3], _take(3.0, 8)):
+        _csv(tmp_path / "one_way.csv", "time_s,acc_ms2,tacho_V", ts, xs, ps)
+        assert cut_recording(str(tmp_path / "one_way.csv"), vibration="acc_ms2", tacho="tacho_V").reverses == ()
+        got = inspect_record(str(tmp_path / "one_way.csv"), box, InspectOptions("acc_ms2", tacho="tacho_V"))
+        assert got["speed"]["notes"] == [], got["speed"]["notes"]
+
+
+def test_a_run_s_verdict_says_a_called_take_was_scored_after_its_shaft_turned_back():
+    # a healthy take of the tiny run's box, 3 s forward and 5 s backward, scored after its reversal against a history
+    # turning forward: na4 called it and the verdict read 'damage on the input pinion 25T (stage 1): z = 30.28 ...;
+    # look at that gear.', the reversal in a warning further down
+    from gearlab.kinds.detection_summary import take_lines
+
+    take = {
+        "condition": "16 Hz", "named": "input pinion 25T (stage 1)",
+        "call": "watched-gear fault: input pinion 25T (stage 1)",
+        "summary": "input pinion 25T (stage 1): z = 30.28 (threshold 2.58), tooth 22 of 25",
+        "nonsync": {"changed": False, "order": 4.56, "z": 4.1, "threshold": 6.4},
+    }  # fmt: skip
+    back = (
+        "rec/back.zip: 12.18 Hz .. 16 Hz over the take: a run-up or coast-down?; scored on 79 of 129 revolutions at "
+        "16.00 .. 16.00 Hz, after the shaft reverses in its turn of 3 .. 3.15 s (the history's 16.00 Hz ± 2.5%)"
+    )
+    summary = {"which_gear": {"records": {"rec/back.zip": take}}, "conditions": {"16 Hz": {"warnings": [back]}}}
+    records = [
+        {"condition": "16 Hz", "method": "na4", "thresholds": {"record10": 4.56},
+         "test_scores": {"rec/back.zip": {"record10": [10.6, 10.7]}}},
+    ]  # fmt: skip
+    (line,) = take_lines(summary, records, "record10")
+    assert line.startswith(
+        "take back.zip: scored on its turns after the shaft reverses in its turn of 3 .. 3.15 s: the call may be the "
+        "direction, where the history turned the other way"
+    ), line
+    assert "damage on the input pinion 25T" in line and "look at that gear" not in line, line
+    (plain,) = take_lines({**summary, "conditions": {}}, records, "record10")  # turning one way: as before
+    assert plain.startswith("take back.zip: damage on the input pinion") and plain.endswith("look at that gear."), plain

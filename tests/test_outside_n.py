@@ -83,6 +83,27 @@ def test_a_run_up_is_scored_on_its_revolutions_at_the_history_s_speed(cli, finis
     assert code == 0 and words in " ".join(stdout.split()), stdout
 
 
+def test_a_take_whose_shaft_turns_back_is_scored_on_one_side_and_says_which(cli, finished, quiet):
+    # 3 s at 16 Hz, stopped and turned back within 0.2 s, 5 s at -16 Hz: the tacho's marks count the turns back as turns
+    # on; scored 'on 79 of 129 revolutions at 16.00 .. 16.00 Hz', the turns back, with no word of it (na4 called the
+    # healthy take at record10, 10.6 over 4.56: its averages are the history's run backwards)
+    out, folder = finished
+    t = np.arange(int(8.2 * FS)) / FS
+    hz = np.interp(t, [0, 3.0, 3.1, 3.2, 8.2], [SPEED, SPEED, 0.0, -SPEED, -SPEED])
+    theta = 0.3 + 2 * np.pi * np.cumsum(hz) / FS
+    vib = (np.sin(32 * theta) + 0.3 * np.sin(64 * theta + 0.4) + 0.2 * np.sin(theta)) * (hz / SPEED) ** 2
+    vib += 0.3 * np.random.default_rng(3).standard_normal(t.size)
+    tacho = np.where(np.mod(theta * PULSES / (2 * np.pi), 1.0) < 0.3, 5.0, 0.05)
+    take = write_zip(folder / "back.zip", text(vib, tacho))
+    code, stdout, err = cli("score", out, take, "--json")
+    assert code == 0, err
+    (words,) = {r["scored_on"] for r in json.loads(stdout)}
+    assert words.startswith("scored on 79 of 129 revolutions at 16.00 .. 16.00 Hz, after the shaft reverses in its ")
+    assert "turn of 3 .. 3.15 s (the history's 16.00 Hz" in words, words
+    code, stdout, err = cli("score", out, take)  # the printout says it too
+    assert code == 0 and words in " ".join(stdout.split()), stdout
+
+
 def test_a_take_wholly_outside_the_band_is_refused_in_one_line_with_its_counts(cli, finished, quiet):
     out, folder = finished
     take = folder / "fast.zip"

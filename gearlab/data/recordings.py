@@ -51,7 +51,7 @@ from ..files import split_take, take_file  # a take of a logger's file of severa
 from ..gearbox.orders import settle_turns
 from ..gearbox.speed import varies_words  # a run-up said so, with a tacho or without
 from ..signals import check_signal, first_complete
-from ..signals.checks import fmt_hz, revolution_speeds
+from ..signals.checks import VARIES_WORDS, fmt_hz, reversal, revolution_speeds, turn_times
 from ..signals.spikes import acquisition
 from . import raw_binary
 from .channel_units import STANDARD_GRAVITY as STANDARD_GRAVITY  # the one g of units and sensitivities
@@ -614,6 +614,7 @@ class CutRecording:
     units: str = ""  # how the values became m/s² (channel_scale): gearlab score shows it
     speeds: np.ndarray | None = None  # each revolution's (Hz, input shaft): gearlab score scores a run-up's in band
     read: tuple = ()  # (the Recording read, drift out; its flaws) where keep_read: gearlab score reads it once
+    reverses: tuple = ()  # (k, t0, t1): its shaft reverses in revolution k - 1, t0 .. t1 s (signals.checks.reversal)
 
 
 def cut_recording(
@@ -667,7 +668,11 @@ def cut_recording(
     revs, warns = cut.revolutions[start:], rec.warnings + flaws + (() if warning is None else (warning,))
     first, speeds = first_complete(angle) + int(start), revolution_speeds(angle, rec.fs)[start:]  # localisation, score
     made = (str(path), revs, float(cut.speed_hz), float(rec.fs), raw.size, int(start), how, warns, first, rec.units)
-    return CutRecording(*made, speeds, (rec, flaws) if keep_read else ())
+    # a shaft that stops and turns back: its speed varies, and a tacho's pulses alone do not tell it (reversal)
+    turned = (
+        reversal(revs, turn_times(angle, rec.fs)[start:]) if rec.tacho is not None and VARIES_WORDS in how else None
+    )
+    return CutRecording(*made, speeds, (rec, flaws) if keep_read else (), turned or ())
 
 
 # --- the header alone: what `gearlab validate` checks -----------------------------------------

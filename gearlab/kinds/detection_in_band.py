@@ -13,7 +13,7 @@ import numpy as np
 
 from ..data.chain import Chain
 from ..errors import GearlabInputError
-from ..signals.checks import SPEED_VARIES, VARIES_WORDS, fmt_hz
+from ..signals.checks import SPEED_VARIES, VARIES_WORDS, fmt_hz, reversal_words
 
 # A take whose speed varies beyond a steady take's (speed_varies: a run-up or coast-down) is scored on its
 # revolutions within this share of its condition's history speed (the median of the history records' speeds: no
@@ -74,18 +74,25 @@ def in_band(rec, centres: dict[str, float], whose: str = "") -> InBand:
 
 def _words(rec, part: slice, whose: str) -> str:
     """'31 of 197 revolutions at 15.60 .. 16.35 Hz': the *part* of *rec*'s revolutions a run keeps, in the words a
-    test take's score and a history take's steady part share."""
+    test take's score and a history take's steady part share; of a take whose shaft reverses (CutRecording.reverses),
+    which side of the reversal the part lies on, and where that is."""
     speeds = rec.speeds[part]
     n = part.stop - part.start
-    return f"{n} of {len(rec.speeds)}{whose} revolutions at {speeds.min():.2f} .. {speeds.max():.2f} Hz"
+    said = f"{n} of {len(rec.speeds)}{whose} revolutions at {speeds.min():.2f} .. {speeds.max():.2f} Hz"
+    if not rec.reverses:
+        return said
+    k = rec.reverses[0]
+    side = "after" if part.start >= k else "before" if part.stop <= k else "across"
+    return f"{said}, {side} {reversal_words(rec.reverses)}"
 
 
 def _cut(rec, part: slice):
-    """*rec* cut to the revolutions *part*: its mean speed, first revolution and speeds the part's."""
+    """*rec* cut to the revolutions *part*: its mean speed, first revolution and speeds the part's (a reversal said
+    by _words, the part turning one way)."""
     speeds = rec.speeds[part]
     first = rec.first_revolution + part.start
     cut = replace(rec, revolutions=rec.revolutions[part], speed_hz=float(np.mean(speeds)), first_revolution=first)
-    return replace(cut, speeds=speeds)
+    return replace(cut, speeds=speeds, reverses=())
 
 
 def steady(rec, whose: str = "") -> InBand:

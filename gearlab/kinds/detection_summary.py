@@ -7,6 +7,7 @@ here is the run's (detection_which_gear, detection_verdict): this module words t
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 
 import numpy as np
@@ -23,6 +24,8 @@ from .record_effects import logged
 # take lies ('na4 +5281 sd' of a chipped take over two history takes, its NA4 units within 0.5 of each other; a
 # history's units alike within 1e-5 read '+362843 sd'), and a person reads the two scores; below it, the figure
 FAR_SD = 100
+# a cut take's words of the side of its reversal scored (detection_in_band._words, signals.checks.reversal_words)
+REVERSES = re.compile(r"(?:after|before|across) the shaft reverses in its turn of \S+ \.\. \S+ s")
 
 
 def verdict(summary: Mapping, records: list[Mapping]) -> list[str]:
@@ -60,6 +63,14 @@ def _clipped(summary: Mapping, condition: str, path: str) -> str:
     said = ((summary.get("conditions") or {}).get(condition) or {}).get("warnings") or []
     flat = [w.removeprefix(f"{path}: ").split(" (")[0] for w in said if w.startswith(f"{path}: ") and "(clipped" in w]
     return " and ".join(flat)
+
+
+def _reversed(summary: Mapping, condition: str, path: str) -> str:
+    """The run's warning that *path*'s shaft reverses, as the part scored ('after the shaft reverses in its turn of 3
+    .. 3.15 s': detection_in_band's words); "" where it turns one way."""
+    said = ((summary.get("conditions") or {}).get(condition) or {}).get("warnings") or []
+    found = (REVERSES.search(w) for w in said if w.startswith(f"{path}: "))
+    return next((m[0] for m in found if m), "")
 
 
 def _methods(records: list[Mapping], condition: str, path: str, unit: str) -> tuple[list[str], int]:
@@ -144,13 +155,18 @@ def take_lines(summary: Mapping, records: list[Mapping], unit: str) -> list[str]
         # samples: the input pinion, z 32 over 2.6)
         clip = _clipped(summary, condition, path) if said else ""
         said = ([f"clipped ({clip}): the call may be the clipping, record at a larger range"] if clip else []) + said
+        # a take whose shaft stops and turns back is scored on one side (a healthy one, scored after its reversal
+        # against a history turning the other way: na4 called it, the input pinion localised, z 30 over 2.6)
+        turned = _reversed(summary, condition, path) if said else ""
+        way = "the call may be the direction, where the history turned the other way; record a take turning its way"
+        said = ([f"scored on its turns {turned}: {way}"] if turned else []) + said
         if not said:
             quiet.append(_name(path))
             continue
         todo = "look at that gear" if take.get("named") else ""
         todo += (" and the bearings" if todo else "look at the bearings") if OTHER_NONSYNC in call else ""
         todo = todo or ("look at the watched gear" if called and call.startswith(WATCHED) else "")
-        todo = "" if level or clip else todo
+        todo = "" if level or clip or turned else todo
         lines.append(f"take {_name(path)}: " + "; ".join(said) + (f"; {todo}." if todo else "."))
     if quiet:
         lines.append(

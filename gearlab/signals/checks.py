@@ -231,3 +231,40 @@ def read_off_mark(revs: np.ndarray, reference: np.ndarray, any_turn: bool = Fals
     running the other way?): its tooth is counted as its history counts it, mirrored (detection_which_gear's
     turned_tooth), in a detection run's which-gear table as in `gearlab score`."""
     return not any_turn and bool(off_mark_line(revs, reference)) and not polarity_line(revs, reference)
+
+
+# A take whose shaft reverses: a pulse tacho counts turns either way, and read so the revolutions after the reversal
+# are those before run backwards, off the mark by the pulse's width (the other edge triggers). Found where the
+# revolutions after a take's slowest turn (through which it stops and turns back) match those before better, by
+# OFF_MARK, at another turn or mirrored than at the mark (and POLARITY there at least): a 16/37 + 28/71 box 1.5 s
+# forward, stopped, 2 s backward reads 0.77 at the mark and 1.00 mirrored; the same stop forward 0.995 at the mark.
+# Each side needs REVERSAL_TURNS turns. A mark's edges close together (a narrow pulse) tell a symmetric mesh's
+# reversal less.
+REVERSAL_TURNS = 5
+
+
+def reversal(revs: np.ndarray, at: np.ndarray) -> tuple[int, float, float] | None:
+    """(k, t0, t1) of a take whose shaft reverses: *revs* (R, points), its consecutive revolutions cut at its tacho's
+    marks, *at* their R + 1 turn times (s, turn_times); revolution k - 1, from t0 to t1 s, holds the reversal,
+    revolutions k on turn the other way. None where the take shows none."""
+    at = np.asarray(at, dtype=float)
+    if len(revs) < 2 * REVERSAL_TURNS + 1 or at.size != len(revs) + 1:
+        return None
+    slow = int(np.argmax(np.diff(at)))
+    if min(slow, len(revs) - slow - 1) < REVERSAL_TURNS:
+        return None
+    b, a = (v - v.mean() for v in (np.asarray(revs[:slow]).mean(axis=0), np.asarray(revs[slow + 1 :]).mean(axis=0)))
+    norm = float(np.linalg.norm(a) * np.linalg.norm(b))
+    if not norm > 0:
+        return None
+    ref = np.conj(np.fft.rfft(b))
+    shifted, mirrored = (np.fft.irfft(ref * np.fft.rfft(x), n=a.size) / norm for x in (a, a[::-1].copy()))
+    best = max(float(shifted.max()), float(mirrored.max()))
+    if best < POLARITY or best - float(shifted[0]) <= OFF_MARK:
+        return None
+    return slow + 1, float(at[slow]), float(at[slow + 1])
+
+
+def reversal_words(found: tuple[int, float, float]) -> str:
+    """reversal's *found* in words: 'the shaft reverses in its turn of 1.96 .. 3.2 s'."""
+    return f"the shaft reverses in its turn of {found[1]:.3g} .. {found[2]:.3g} s"
