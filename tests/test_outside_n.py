@@ -97,9 +97,15 @@ def test_a_take_whose_shaft_turns_back_is_scored_on_one_side_and_says_which(cli,
     take = write_zip(folder / "back.zip", text(vib, tacho))
     code, stdout, err = cli("score", out, take, "--json")
     assert code == 0, err
-    (words,) = {r["scored_on"] for r in json.loads(stdout)}
+    rows = json.loads(stdout)
+    (words,) = {r["scored_on"] for r in rows}
     assert words.startswith("scored on 79 of 129 revolutions at 16.00 .. 16.00 Hz, after the shaft reverses in its ")
     assert "turn of 3 .. 3.15 s (the history's 16.00 Hz" in words, words
+    # called (na4, its averages run backwards against the history's): the call doubted, as the run's verdict doubts it
+    called = {(r["method"], r["unit"]) for r in rows if r["decision"] == "fault"}
+    assert called == {("na4", "record5"), ("na4", "record10")}, called
+    assert words.endswith("; the take is called: the call may be the direction, where the history turned the other "
+                          "way; record a take turning its way"), words  # fmt: skip
     code, stdout, err = cli("score", out, take)  # the printout says it too
     assert code == 0 and words in " ".join(stdout.split()), stdout
 

@@ -120,3 +120,17 @@ def clipped_call(called: bool, flaws) -> list[str]:
     said = "; the take is called: a clipped mesh's flattened peaks change its shafts' averages, the call may be the "
     said += "clipping (record at a larger range)"
     return [f + said if called and "clipped" in f else f for f in flaws]
+
+
+# A called take scored on one side of its shaft's reversal (detection_in_band's words): its averages may run the other
+# way than its history's (the tiny run's healthy take scored after its reversal: na4 called it, the input pinion
+# localised at z 30 over 2.6)
+REVERSED_CALL = "the call may be the direction, where the history turned the other way; record a take turning its way"
+
+
+def reversed_call(called: bool, scored_on: str | None) -> str | None:
+    """A cut take's words *scored_on* (detection_in_band) with REVERSED_CALL after them where its shaft reverses and
+    the take is *called* (a fault or other damage): `gearlab score`'s rows as the run's verdict (detection_summary)."""
+    if not called or not scored_on or "the shaft reverses" not in scored_on:
+        return scored_on
+    return f"{scored_on}; the take is called: {REVERSED_CALL}"

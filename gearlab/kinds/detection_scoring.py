@@ -43,7 +43,7 @@ from .detection_fit import (
 )
 from .detection_in_band import IN_BAND, span, stretch, too_narrow
 from .detection_in_band import in_band as shared_in_band
-from .detection_level import called_level, clipped_call, level_line, level_spread, most_called
+from .detection_level import called_level, clipped_call, level_line, level_spread, most_called, reversed_call
 from .detection_own import (
     asked_off,
     by_level,
@@ -653,9 +653,10 @@ def score(
             said = called_level(called, mine[0]["localised"], cond["level_ratio"][f.path], cond["level_spread"])
             for r in mine if said else ():
                 r["level"] = "; ".join(w for w in (said, r["level"]) if w)
-            flaws = clipped_call(any(r["decision"] not in ("healthy", "not scored") for r in mine), mine[0]["flaws"])
+            flagged = any(r["decision"] not in ("healthy", "not scored") for r in mine)
+            flaws, scored_on = clipped_call(flagged, mine[0]["flaws"]), reversed_call(flagged, mine[0]["scored_on"])
             for r in mine:
-                r["flaws"] = flaws
+                r["flaws"], r["scored_on"] = flaws, scored_on
     # in the order the files were given (week 1, 2, 3, ...), not grouped by condition: the printout and the trend
     given = {str(f): i for i, f in enumerate(files)}
     rows.sort(key=lambda r: given[r["file"]])

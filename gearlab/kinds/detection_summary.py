@@ -13,7 +13,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..signals.nonsync import HUM
-from .detection_level import most_called
+from .detection_level import REVERSED_CALL, most_called
 from .detection_records import longest_tsa
 from .detection_verdict import OTHER_NONSYNC, detection_lines, watched_calls
 from .detection_which_gear import OTHER, UNDETERMINED, WATCHED
@@ -155,11 +155,9 @@ def take_lines(summary: Mapping, records: list[Mapping], unit: str) -> list[str]
         # samples: the input pinion, z 32 over 2.6)
         clip = _clipped(summary, condition, path) if said else ""
         said = ([f"clipped ({clip}): the call may be the clipping, record at a larger range"] if clip else []) + said
-        # a take whose shaft stops and turns back is scored on one side (a healthy one, scored after its reversal
-        # against a history turning the other way: na4 called it, the input pinion localised, z 30 over 2.6)
+        # a take whose shaft stops and turns back is scored on one side: as gearlab score's rows (reversed_call)
         turned = _reversed(summary, condition, path) if said else ""
-        way = "the call may be the direction, where the history turned the other way; record a take turning its way"
-        said = ([f"scored on its turns {turned}: {way}"] if turned else []) + said
+        said = ([f"scored on its turns {turned}: {REVERSED_CALL}"] if turned else []) + said
         if not said:
             quiet.append(_name(path))
             continue
