@@ -164,7 +164,7 @@ def test_a_files_entry_reads_its_own_tacho_shaft_as_the_target_does(tmp_path):
 def test_validate_names_a_files_entry_s_bad_tacho_shaft_or_marks(tmp_path, cli, write_scenario, own, said):
     (tmp_path / "box.toml").write_text(BOX)
     for name in ("h", "t"):
-        record(tmp_path / f"{name}.csv", seconds=0.2)
+        record(tmp_path / f"{name}.csv", seconds=0.5)  # a history long enough for its units: validate reads its tacho
     entry = '{ file = "t.csv", role = "test", label = "fault", ' + (own or 'tacho_shaft = "output"') + " }"
     history = '{ file = "h.csv", role = "history", label = "healthy" }'
     code, out, err = cli("validate", write_scenario(DETECT.format(files=f"{history}, {entry}")))
