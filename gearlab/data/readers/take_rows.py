@@ -28,7 +28,9 @@ def no_take_column(path, column: str, available, where: str) -> GearlabInputErro
 
 
 def take_rows(contents: Contents, path, column: str, mark: str) -> Contents:
-    """*contents* of a file kept to the rows of take *mark* under *column* (*path*: the take's name, for messages)."""
+    """*contents* of a file kept to the rows of take *mark* under *column* (*path*: the take's name, for messages).
+    The column marks takes, it is none of the take's channels: not offered as its vibration (a log of time_s, acc_V,
+    segment asked 'which channel is the vibration? the file has acc_V, segment')."""
     marks = marks_of(np.ravel(contents.found[column]))
     keep = marks == mark
     if not keep.any():
@@ -41,4 +43,5 @@ def take_rows(contents: Contents, path, column: str, mark: str) -> Contents:
         return arr[keep] if arr.ndim >= 1 and arr.shape[0] == n else v
 
     found = {k: rows(v) for k, v in contents.found.items()}
-    return replace(contents, found=found, times=[(w, rows(v)) for w, v in contents.times])
+    available = [c for c in contents.available if c != column]
+    return replace(contents, found=found, available=available, times=[(w, rows(v)) for w, v in contents.times])
