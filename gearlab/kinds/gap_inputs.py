@@ -14,10 +14,8 @@ from ..errors import GearlabInputError
 from ..events import Event
 from ..parts.measured import Target
 from .common import DatasetEntry, measured, unconfirmed_speed
+from .detection_records import SPEED_GROUP
 
-# History records of one condition: tacho speeds within this relative spread (a 30 Hz and a 40 Hz
-# record are two conditions; one rig at one setting drifts by well under 1 %).
-SPEED_SPREAD = 0.02
 # The gap statistics need at least this many healthy revolutions per side (gearlab.gap.stats).
 MIN_HEALTHY = 10
 # Mesh sidebands the order bands resolve beside each mesh harmonic (gearlab.gap.views.BandPlan):
@@ -89,12 +87,14 @@ def read_history(
             f"inspect {path} --gearbox ... says what differs"
         )
     low, high = min(speeds.values()), max(speeds.values())
-    if high > low * (1 + SPEED_SPREAD):
+    # one condition: the speeds a detection run groups as one (a 30 Hz and a 40 Hz record are two; a motor's slip at
+    # 29.5, 30 and 30.6 Hz is one, as the same history is in a detection run)
+    if high > low * (1 + SPEED_GROUP):
         shown = ", ".join(f"{p} {s:.2f} Hz" for p, s in speeds.items())
         mesh = all("mesh lines" in how for how in found.values())  # no tacho: the speeds the description's lines show
         raise GearlabInputError(
             f"{records.where} key 'files': the history records run at different speeds ({shown}); "
-            "the gap is diagnosed for one operating condition: give one speed's records"
+            f"the gap is diagnosed for one operating condition: give one speed's records (within {SPEED_GROUP:.0%})"
             + (
                 f" (or, read off the description's mesh lines, a tooth count differs: gearlab inspect "
                 f"{next(iter(speeds))} --gearbox ... says what)"
