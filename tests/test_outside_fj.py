@@ -75,3 +75,19 @@ def test_a_gap_history_within_a_detection_runs_condition_is_one_condition(tmp_pa
     code, out, err = cli("run", _gap(tmp_path, 22), "--quick")
     assert "different speeds" not in err, err
     assert "structure differs: mesh order 21 measured, 22 expected (stage 1)" in err, out + err
+
+
+def test_a_slow_shafts_run_out_over_a_few_turns_is_no_baseline_drift():
+    # a 3 s take of the 21/86 + 25/92 box at 30 Hz: its output shaft's run-out (1.99 Hz, 0.4 m/s²) turns 6 times and
+    # projected onto the baseline's polynomial alone: 'the baseline ... drifts by 0.9415 m/s² over the take (...: a
+    # DC-coupled input, a sensor settling?): taken out', most of the output shaft's own line taken with it
+    from gearlab.signals.spikes import acquisition
+
+    x = _box([(21, 86), (25, 92)], 30.0, 3.0, 6400.0, 1)
+    kept, notes = acquisition(x, 6400.0)
+    assert notes == () and np.array_equal(kept, x), notes
+    # a sensor settling under the same take is still said and taken out, the run-out left
+    t = np.arange(x.size) / 6400.0
+    kept, notes = acquisition(x + 4.0 * np.exp(-t / 0.8), 6400.0)
+    assert len(notes) == 1 and "drifts by" in notes[0], notes
+    assert np.std(kept - x) < 0.1, np.std(kept - x)

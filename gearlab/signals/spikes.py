@@ -129,6 +129,11 @@ DROPOUT_S = 0.002
 BASELINE_DEGREE = 5
 BASELINE_SHARE = 0.25
 BASELINE_BLOCKS = 4096
+# A slow shaft's run-out of a few turns over the take is a line, no baseline: it projected on the polynomial alone (a
+# 92T output gear at 2 Hz, 6 turns of a 3 s take at 0.4 m/s²: 'drifts by 0.94 m/s²', taken out with the shaft's own
+# line). The strongest line of BASELINE_TURNS turns over the take is fitted beside the polynomial; fewer turns than
+# the least are a drift's (the which-gear check needs 8 turns of a shaft: signals.nonsync.TURNS).
+BASELINE_TURNS = (2.0, 16.0)
 
 
 # A channel of which over PULSE_LEVELS of the samples lie within PULSE_BAND of its range from its lowest or its highest
@@ -153,6 +158,24 @@ def not_pulses(x: np.ndarray) -> None:
         )
 
 
+def _baseline(x: np.ndarray, line: bool) -> tuple[np.ndarray, float, float, float]:
+    """The baseline of *x* at every sample, its offset, its swing and the RMS of *x* about it: a polynomial of
+    BASELINE_DEGREE fitted to the means of BASELINE_BLOCKS blocks (a 10-minute take's design matrix: 0.5 GB); with
+    *line*, beside the strongest line of BASELINE_TURNS turns over the take the polynomial leaves (the line kept)."""
+    cuts = np.linspace(0, x.size, min(x.size, BASELINE_BLOCKS) + 1).astype(int)
+    means, middles = np.add.reduceat(x, cuts[:-1]) / np.diff(cuts), (cuts[:-1] + cuts[1:] - 1) / 2 / (x.size - 1)
+    u = 2.0 * middles - 1.0
+    V = np.polynomial.legendre.legvander(u, BASELINE_DEGREE)
+    coef = np.linalg.lstsq(V, means, rcond=None)[0]
+    if line and means.size >= 8 * BASELINE_TURNS[1]:  # enough blocks to tell a line
+        turns = np.arange(BASELINE_TURNS[0], BASELINE_TURNS[1], 0.05)  # u spans 2: a turn over the take is pi in u
+        power = np.abs(np.exp(-1j * np.pi * np.outer(turns, u)) @ (means - V @ coef))
+        phase = np.pi * turns[int(np.argmax(power))] * u
+        coef = np.linalg.lstsq(np.column_stack([V, np.cos(phase), np.sin(phase)]), means, rcond=None)[0][: len(coef)]
+    fit = np.polynomial.legendre.legval(np.linspace(-1.0, 1.0, x.size), coef)
+    return fit, float(np.mean(fit)), float(np.ptp(fit)), float(np.std(x - fit))
+
+
 def acquisition(x: np.ndarray, fs: float) -> tuple[np.ndarray, tuple[str, ...]]:
     """*x* (m/s², sampled at *fs*) with a baseline off zero or drifting taken out, and what its acquisition did to it:
     each side clipped, each dropout, the baseline; a pulse train refused (not_pulses). A healthy take whose ICP sensor
@@ -172,13 +195,12 @@ def acquisition(x: np.ndarray, fs: float) -> tuple[np.ndarray, tuple[str, ...]]:
                 f"a dropout: {b - a} samples ({(b - a) / fs:.3g} s) flat at {x[a]:.4g} m/s² from {a / fs:.4g} s"
             )
     if x.size > 2 * BASELINE_DEGREE:
-        # fitted to the means of BASELINE_BLOCKS blocks (a 10-minute take's design matrix: 0.5 GB), read at every sample
-        cuts = np.linspace(0, x.size, min(x.size, BASELINE_BLOCKS) + 1).astype(int)
-        means, middles = np.add.reduceat(x, cuts[:-1]) / np.diff(cuts), (cuts[:-1] + cuts[1:] - 1) / 2 / (x.size - 1)
-        coef = np.polynomial.legendre.legfit(2.0 * middles - 1.0, means, BASELINE_DEGREE)
-        fit = np.polynomial.legendre.legval(np.linspace(-1.0, 1.0, x.size), coef)
-        offset, swing, rest = float(np.mean(fit)), float(np.ptp(fit)), float(np.std(x - fit))
-        if max(abs(offset), swing) > BASELINE_SHARE * rest:
+        # a drift the polynomial alone finds, and finds again beside a slow shaft's line (BASELINE_TURNS)
+        for line in (False, True):
+            fit, offset, swing, rest = _baseline(x, line)
+            if max(abs(offset), swing) <= BASELINE_SHARE * rest:
+                break
+        else:
             notes.append(
                 f"the baseline sits at {offset:.4g} m/s² and drifts by {swing:.4g} m/s² over the take (the vibration's "
                 f"RMS {rest:.4g}: a DC-coupled input, a sensor settling?): taken out"
