@@ -91,3 +91,23 @@ def test_a_slow_shafts_run_out_over_a_few_turns_is_no_baseline_drift():
     kept, notes = acquisition(x + 4.0 * np.exp(-t / 0.8), 6400.0)
     assert len(notes) == 1 and "drifts by" in notes[0], notes
     assert np.std(kept - x) < 0.1, np.std(kept - x)
+
+
+def test_a_threshold_of_few_overlapping_windows_a_take_rests_on_the_takes_means_too():
+    # a 23/70 + 27/62 + 31/65 box's three 12 s history takes hold 35 turns of its 65T output shaft: 2-3 record30
+    # windows each, moved by 3 turns, whose own spread rests on 0.3 degrees of freedom; the takes' means (2 more)
+    # were left out where they show no take-to-take effect, and the t quantile on 0.3 put fm4's record30 threshold
+    # at 43672 (its history at 3.0 +- 0.27) and na4's, on the log scale, past exp's range: inf, with a bare 'warning:
+    # overflow encountered in exp'; the 65T chip at fm4 137, na4 495 was called by neither
+    import warnings
+
+    from gearlab.kinds.record_effects import fit, overlap_dof
+
+    takes = [np.array([2.9, 3.3]), np.array([3.0, 2.7]), np.array([3.1, 3.05])]  # no take-to-take effect
+    dofs = [overlap_dof(2, 30, 3)] * 3
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sized = fit(takes, 0.99, [1.2] * 3, dofs, floor=0.0)
+    plain = fit(takes, 0.99, [1.2] * 3, dofs)
+    assert plain.record_sd == 0.0 and plain.dof >= 2 and plain.threshold < 3.0 + 10 * 0.27, plain
+    assert np.isfinite(sized.threshold) and sized.threshold < 20.0, sized

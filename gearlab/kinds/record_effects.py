@@ -194,6 +194,14 @@ def fit(groups, p: float, independent=None, dofs=None, floor: float | None = Non
         estimate = None if estimate is None else float(means.var(ddof=1)) - float(np.mean(within / m))
     R = len(means)
     record_var = max(0.0, estimate) if estimate is not None else 0.0
+    if estimate is not None and estimate <= 0.0 and R >= SIZED_RECORDS and within_dof < R - 1:
+        # no take-to-take effect, and a take's units overlap so much that their own spread rests on fewer degrees of
+        # freedom than the takes' means (three 35-turn takes of a 65T output shaft: 2 record30 windows each, 0.3 in
+        # all; its t quantile put fm4's threshold at 43672 over a history at 3.0 +- 0.27, NA4's past exp's range):
+        # with sigma_a = 0 each mean lies sigma_e / sqrt(m_r) about mu, so the means estimate sigma_e^2 too (the
+        # one-way model's total sum of squares), on R - 1 more degrees of freedom
+        between = float(np.sum(m * (means - means.mean()) ** 2))
+        within, within_dof = (within * within_dof + between) / (within_dof + R - 1), within_dof + R - 1
     mean_var = float(np.sum(record_var + within / m)) / R**2
     sd = np.sqrt(record_var + within + mean_var)
     # two records: sigma_a^2 on one degree of freedom, whose t quantile (31.8 at 99 %, 13.6 times the
