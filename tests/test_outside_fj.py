@@ -111,3 +111,21 @@ def test_a_threshold_of_few_overlapping_windows_a_take_rests_on_the_takes_means_
     plain = fit(takes, 0.99, [1.2] * 3, dofs)
     assert plain.record_sd == 0.0 and plain.dof >= 2 and plain.threshold < 3.0 + 10 * 0.27, plain
     assert np.isfinite(sized.threshold) and sized.threshold < 20.0, sized
+
+
+def test_a_detection_history_that_contradicts_the_description_is_said_before_a_take_without_history(tmp_path, cli):
+    # the 21/86 + 25/92 box described with a 22-tooth first pinion, no tacho: every take's speed read off the wrong
+    # mesh (630 Hz / 22), and a damaged take read at 5.76 Hz ('5 x M1, the input pinion's sidebands confirm it')
+    # stopped the run with 'condition '5.76 Hz' (...) has no history record; each condition needs its own healthy
+    # history', where the guide promises the history's contradiction of the tooth counts first (a take at 33 Hz here)
+    _gap(tmp_path, 22)
+    np.savez(tmp_path / "t.npz", acc_V=_box([(21, 86), (25, 92)], 33.0, 3.0, 6400.0, 7) / G * 0.1, fs=6400.0)
+    (tmp_path / "detect.toml").write_text(
+        '[scenario]\nname = "d"\nkind = "detection"\n\n[source]\ngearbox = "box.toml"\nfaults = { chip = [20] }\n'
+        'healthy = 48\n\n[target]\nvibration = "acc_V"\nsensitivity = "100 mV/g"\nfiles = [\n'
+        '  { file = "h*.npz", role = "history", label = "healthy" },\n'
+        '  { file = "t.npz", role = "test", label = "fault" },\n]\n\n[[methods]]\nadapter = "matched_filter"\n'
+    )
+    code, out, err = cli("run", tmp_path / "detect.toml", "--quick")
+    assert code == 2 and "has no history record" not in err, err
+    assert "differs from the [source]'s gearbox: mesh order 21 measured, 22 expected (stage 1)" in err, err

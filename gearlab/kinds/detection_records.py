@@ -361,6 +361,12 @@ def read_target(
         cond.setdefault("turn_speeds", {})[f.path] = records[f.path].speeds  # a hum told from a bearing (nonsync)
     for name, cond in conditions.items():
         if not cond["history"]:
+            # a history that contradicts the description said first: every take's speed read off its wrong tooth
+            # count, a take lands where no history is (a 21/86 + 25/92 box described with 22 teeth: a damaged take
+            # read at 5.76 Hz, '5 x M1', stopped the run with 'condition '5.76 Hz' ... has no history record')
+            held = {n: {**c, "max_order": _max_order(c, records)} for n, c in conditions.items() if c["history"]}
+            if structure is not None and held and (differs := structure(held)):
+                raise GearlabInputError(differs)
             # a run-up's speeds said here too: the TUI shows a failed run's last line alone (gearlab score's does)
             files = ", ".join(f.path + varies(cond["speed_from"][f.path]) for f, _ in cond["test"])
             raise GearlabInputError(
@@ -386,9 +392,7 @@ def read_target(
             on_event(Event("log", message=f"warning: {line}"))
         # The highest order every history record holds, where the acquisition's anti-alias filter
         # leaves data (as the gap kind compares).
-        cond["max_order"] = min(
-            Chain(fs=records[f.path].fs, speed=speeds[f.path]).max_order for f, _ in cond["history"]
-        )
+        cond["max_order"] = _max_order(cond, records)
         for f, _ in cond["test"]:  # sampled too slowly for that band: refused (too_narrow), as gearlab score does
             too_narrow(
                 f.path, records[f.path].fs, speeds[f.path], cond["max_order"], f"{where} entry {f.entry} key 'file': "
@@ -463,6 +467,11 @@ def read_target(
                     f"{short[0]}; expected a longer record, or shorter [detection] key 'blocks'"
                 )
     return conditions
+
+
+def _max_order(cond: dict, records: dict) -> int:
+    """The highest order every history record of *cond* holds (*records*: each file's record)."""
+    return min(Chain(fs=records[f.path].fs, speed=records[f.path].speed_hz).max_order for f, _ in cond["history"])
 
 
 def short_blocks(turns: float, blocks) -> list[int]:
