@@ -42,7 +42,7 @@ from .structure_later import _outshone as _outshone  # where tests/test_outside_
 SIDEBANDS = 3
 FAMILY = 3  # lines of a foreign comb (module doc: a tone is one line)
 # The source simulates another speed when a measured target's differs by more than this (one rig at
-# one setting drifts by well under 1 %; a history's takes span up to detection_records.SPEED_GROUP).
+# one setting drifts by well under 1 %; a history's takes span up to kinds.common.SPEED_GROUP).
 SPEED_TOL = 0.02
 # A scale factor within this of 1 is a calibration's tolerance, left to the effects.
 LEVEL_TOL = 0.1

@@ -273,6 +273,10 @@ class SourceEntry(DatasetEntry):
     preset: str = setting(str, "B-6-ch5", doc="dataset preset of the source simulator (default B-6-ch5)")
 
 
+# Records without a 'condition' whose speeds lie within this fraction are one operating condition: a detection run's
+# history (detection_records.conditions_of) and a gap's (gap_inputs.read_history) alike.
+SPEED_GROUP = 0.05
+
 # Samples a simulated dataset may hold (4096 float32 each: 16 GB); the thesis's largest has
 # 12 800. The table's keys bound no product, so absurd sizes are refused before any work.
 MAX_SAMPLES = 10**6

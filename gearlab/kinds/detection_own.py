@@ -13,8 +13,8 @@ import numpy as np
 from ..errors import GearlabInputError, did_you_mean
 from ..parts import scoring
 from ..runs import RunDir, input_digest
+from .common import SPEED_GROUP
 from .detection_in_band import IN_BAND
-from .detection_records import SPEED_GROUP
 
 # condition_by's words for a take of the run's own (the printout and the scoring history say them)
 OWN_WORDS = "the run's own"

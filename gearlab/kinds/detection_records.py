@@ -29,6 +29,7 @@ from ..signals.indicators import band_limited, difference_signal
 from ..signals.shaft import shaft_revolutions, without_input_orders
 from ..signals.spikes import without_spikes
 from . import record_effects
+from .common import SPEED_GROUP
 from .detection_in_band import cut_run_ups, span, steady_histories, too_narrow
 from .detection_level import level_warnings, run_levels
 from .detection_settings import Classical
@@ -37,8 +38,6 @@ from .detection_settings import Classical
 HISTORY_STRIDES = 10
 # Fewest history units of a kind that a threshold may be fitted to (by their quartiles).
 MIN_HISTORY_UNITS = 8
-# Records without a 'condition' whose speeds lie within this fraction share a history.
-SPEED_GROUP = 0.05
 
 
 def varies(how: str) -> str:

@@ -13,8 +13,7 @@ from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event
 from ..parts.measured import Target
-from .common import DatasetEntry, measured, unconfirmed_speed
-from .detection_records import SPEED_GROUP
+from .common import SPEED_GROUP, DatasetEntry, measured, unconfirmed_speed
 
 # The gap statistics need at least this many healthy revolutions per side (gearlab.gap.stats).
 MIN_HEALTHY = 10
