@@ -4,19 +4,22 @@ Each of them reads its records (cut into complete input revolutions, not standar
 them here as takes: the history read once (history_of: its band of orders, each take's first
 revolution counted from the input angle's zero, turned to the first take's tacho mark), and each
 record localised against it (which_gear: signals.localise, a two-gear shaft's gear by the
-description's simulated events at the record's speed and rate, data.which_templates). What a
+description's simulated events at the record's speed and rate, data.which_templates); where no shaft's average
+names a change, the record's envelope is (signals.envelope_sync: a strike whose ring's phase wanders). What a
 flag then means to a scenario that watches a gear is the detection kind's (its call); which gear
 carries the change is decided here only.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import GearlabInputError
 from ..signals import POINTS
+from ..signals import envelope_sync as E
 from ..signals import localise as L
 from ..signals import nonsync as NS
 from .chain import Chain
@@ -56,7 +59,8 @@ def history_of(
     to *max_order* (default: band(takes)); *marks*: the tacho's marks per input turn (a take is turned
     to the first take's); *tacho*: the shaft the tacho reads ("": none, a take's zero its first sample, so no
     tooth is fixed across takes; None: not said, the takes share a zero), *pulses*: its marks per turn
-    (the tacho's own shaft counts its teeth from its mark)."""
+    (the tacho's own shaft counts its teeth from its mark). The takes' envelopes are read too (History.envelope:
+    signals.envelope_sync), where they hold enough for it."""
     if not takes:
         raise GearlabInputError("no history record to localise against; expected healthy records of the same gearbox")
     period = int(table.train_period)
@@ -68,16 +72,14 @@ def history_of(
             f"the history's takes: too short for the which-gear check: {turns:.3g} {shaft}-shaft turns "
             f"({shortest} input revolutions), it needs {NS.TURNS}"
         )
-    return L.history(
-        [t.revolutions for t in takes],
-        table,
-        first_revolutions=[t.first % period for t in takes],
-        max_order=band(takes) if max_order is None else max_order,
-        marks=marks,
-        tacho=tacho or "",
-        pulses=pulses,
-        free=tacho == "",
-    )
+    records = [t.revolutions for t in takes]
+    options = {"first_revolutions": [t.first % period for t in takes], "marks": marks, "tacho": tacho or ""}
+    options |= {"pulses": pulses, "free": tacho == ""}
+    hist = L.history(records, table, max_order=band(takes) if max_order is None else max_order, **options)
+    try:  # the takes' envelopes: a strike whose ring's phase wanders, which every synchronous average cancels
+        return dataclasses.replace(hist, envelope=E.history(records, table, **options))
+    except GearlabInputError:  # too short for it, or no band of it holds every shaft's orders: the averages alone
+        return hist
 
 
 def events(description: str, effects=()) -> dict:
@@ -111,15 +113,17 @@ def which_gear(take: Take, hist: L.History, table, made: dict | None) -> dict:
         unread = {"turns": turns, "shaft": shaft, "needed": need}
         return NOT_READ | {"summary": f"not localised: too short for the which-gear check: {said}", "unread": unread}
     try:
-        found = L.localise(
-            take.revolutions,
-            hist,
-            table,
-            first_revolution=take.first % int(table.train_period),
-            templates=templates_for(table, made, take),
-        )
+        first = take.first % int(table.train_period)
+        found = L.localise(take.revolutions, hist, table, first, templates=templates_for(table, made, take))
     except GearlabInputError as exc:
         return NOT_READ | {"summary": f"not localised: {exc}"}
+    if found.named is None and hist.envelope is not None:  # nothing synchronous: a strike the averages cancel?
+        try:
+            seen = E.localise(take.revolutions, hist.envelope, table, first)
+        except GearlabInputError:
+            return found.describe()
+        if seen.named is not None:
+            return E.described(seen, found.summary())
     return found.describe()
 
 

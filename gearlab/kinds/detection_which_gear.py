@@ -47,6 +47,7 @@ The localisation uses the records' signals only; the labels come in with the tab
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -59,6 +60,7 @@ from ..errors import GearlabInputError
 from ..gearbox.simulation import PREFIX, gearbox_of, is_reference, reference
 from ..parts.roc import auc
 from ..signals import POINTS
+from ..signals import envelope_sync as E
 from ..signals import localise as L
 from ..signals import nonsync as NS
 from ..signals import which_template as T
@@ -265,7 +267,8 @@ def store_localisation(run, source: DatasetSpec, conditions: dict, simulator: Da
         return
     for i, (name, (hist, quiet)) in enumerate(histories.items()):
         file = f"localisation{i}.npz"
-        scoring.save_arrays(run.file("scoring", file), **hist.state(), **(quiet.state() if quiet else {}))
+        arrays = {**hist.state(), **E.state(hist.envelope), **(quiet.state() if quiet else {})}
+        scoring.save_arrays(run.file("scoring", file), **arrays)
         found["conditions"][name]["state"] = file
     described = source.preset.removeprefix(PREFIX).rpartition("#")[0] if is_reference(source.preset) else ""
     if Path(described).is_absolute():  # the user's description as simulated (a built-in's name is no file), for a
@@ -325,7 +328,8 @@ def localise_scored(run, records: dict[str, list], turned: dict[str, int] | None
         if state is None:
             continue
         arrays = scoring.load_arrays(run.file("scoring", state))
-        hist = L.History.restored(arrays, table)
+        # the envelope's history: None for a run stored before it was read (the synchronous averages alone)
+        hist = dataclasses.replace(L.History.restored(arrays, table), envelope=E.restored(arrays, table))
         quiet = NS.NonSyncHistory.restored(arrays, table)  # None: a run stored before the residual was read
         # a run stored before the events' simulator was said: the source's description, no effects
         made = meta.get("events", W.events(meta["preset"]))

@@ -327,11 +327,16 @@ def callable_gears(ev: dict) -> list[str]:
     return [first] if first else list(ev["gears"])
 
 
+IN_ENVELOPE = " (in the envelope: a strike whose ring's phase wanders from turn to turn)"  # a call's words (weakly)
+
+
 def weakly(ev: dict) -> str:
     """ ", weakly over <the shaft's other gear> (phase lead L)" of a shaft's evidence (as
     localise.ShaftEvidence.describe()) whose gear is named by a phase lead under WEAK_LEAD; " (undecided by the mesh
     phases: lead L, ...)" of one whose two gears the phases left named (undecided_lead); else "": the call says it as
     the evidence does (an outside lab's burst on a 34T pinion was 'other damage: intermediate gear 65T' at 0.21)."""
+    if ev.get("seen") == "envelope":  # read in the envelope (signals.envelope_sync), not the averages: said so
+        return IN_ENVELOPE
     evidence = ev.get("stage_evidence") or {}
     if not ev.get("which"):
         lead = undecided_lead(evidence) if len(ev.get("gears", ())) == 2 else None

@@ -1,0 +1,84 @@
+"""Which gear in the envelope (gearlab.signals.envelope_sync, read by data.which_gear): on a 39/61 box at 30 Hz
+(tests/jittered_strikes.py), a tooth strike ringing a resonance at 120.9 input orders, its instant jittering by up
+to half a ring period, cancels in every shaft's synchronous average and the non-synchronous check leaves its lines
+out; its shaft's synchronous average of the residual's squared envelope names its gear. A healthy take is not
+called, and a synchronous fault is named as before."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+from jittered_strikes import BOX, Strike, take
+
+from gearlab.data import which_gear as W
+from gearlab.gearbox import order_table, resolve_gearbox
+from gearlab.kinds import detection_which_gear as D
+from gearlab.signals import envelope_sync as E
+from gearlab.signals import localise as L
+from gearlab.signals import which_template as T
+
+PINION, WHEEL = "input pinion 39T (stage 1)", "output gear 61T (stage 1)"
+
+
+@pytest.fixture(scope="module")
+def box(tmp_path_factory):
+    """(the order table, the history of two healthy takes as data.which_gear reads it)."""
+    path = tmp_path_factory.mktemp("mill") / "box.toml"
+    path.write_text(BOX)
+    table = order_table(resolve_gearbox(str(path)))
+    return table, W.history_of([W.Take(*take(seed)) for seed in (1, 2)], table)
+
+
+@pytest.mark.parametrize(("strike", "gear"), [(Strike("input", 0.3, 0.5), PINION), (Strike("output", 0.7, 1.0), WHEEL)])
+def test_a_strike_whose_ring_wanders_is_named_on_its_gear_in_the_envelope(box, strike, gear):
+    table, hist = box
+    t = W.Take(*take(11, strike))
+    # the synchronous averages alone: nothing localised, as before the envelope was read
+    alone = L.localise(t.revolutions, hist, table, t.first)
+    assert alone.named is None, alone.summary()
+    found = W.which_gear(t, hist, table, None)
+    assert found["named"] == gear and found["seen"] == "envelope", found["summary"]
+    assert E.SEEN in found["summary"] and "nothing localised" in found["summary"], found["summary"]
+    call = D.call_of(found, [PINION])
+    assert call.endswith(gear + T.IN_ENVELOPE), call
+    assert call.startswith(D.WATCHED if gear == PINION else D.OTHER), call
+    # the tooth from the envelope's peak: the strike's tooth, or the next (the ring's decay moves the peak later)
+    ev = next(s for s in found["shafts"] if s["shaft"] == strike.shaft)
+    teeth = ev["tooth"][gear]
+    placed = int(strike.angle * teeth["of"]) + 1
+    assert (teeth["tooth"] - placed) % teeth["of"] in (0, 1), (teeth, placed)
+
+
+def test_healthy_takes_are_not_called_in_the_envelope(box):
+    table, hist = box
+    for seed in range(20, 26):
+        found = W.which_gear(W.Take(*take(seed)), hist, table, None)
+        assert found["named"] is None, found["summary"]
+
+
+def test_the_envelope_s_history_is_saved_and_restored_with_the_averages(box):
+    table, hist = box
+    back = E.restored({**hist.state(), **E.state(hist.envelope)}, table)
+    t = W.Take(*take(11, Strike("input", 0.3, 0.5)))
+    again = W.which_gear(t, dataclasses.replace(hist, envelope=back), table, None)
+    assert again == W.which_gear(t, hist, table, None)
+    assert E.restored(hist.state(), table) is None  # a run stored before the envelope was read: the averages alone
+
+
+def test_a_synchronous_fault_is_named_as_before(box):
+    """A chipped 24T pinion of the simulated 21/63 + 24/56 reducer: the synchronous averages name it, and the
+    envelope changes nothing of what they say."""
+    from which_gear_takes import REDUCER, reducer_take
+
+    table = order_table(resolve_gearbox(str(REDUCER)))
+    made = (reducer_take([], seed, 25.0, 20_000.0) for seed in (3, 4))
+    takes = [W.Take(revs, first, 25.0, 20_000.0) for _, revs, first in made]
+    hist = W.history_of(takes, table)
+    assert hist.envelope is not None
+    chip = {"name": "chip", "gear": "intermediate pinion", "tooth": 5, "step": 16}
+    _, revs, first = reducer_take([chip], 5, 25.0, 20_000.0)
+    t = W.Take(revs, first, 25.0, 20_000.0)
+    found = W.which_gear(t, hist, table, None)
+    assert found == W.which_gear(t, dataclasses.replace(hist, envelope=None), table, None)
+    assert found["named"] is not None and "24T" in found["named"] and "seen" not in found, found["summary"]
