@@ -43,6 +43,7 @@ def test_a_strike_whose_ring_wanders_is_named_on_its_gear_in_the_envelope(box, s
     call = D.call_of(found, [PINION])
     assert call.endswith(gear + T.IN_ENVELOPE), call
     assert call.startswith(D.WATCHED if gear == PINION else D.OTHER), call
+    assert D.evidence(found).startswith(D.ENVELOPE + f"{strike.shaft} z "), D.evidence(found)
     # the tooth from the envelope's peak: the strike's tooth, or the next (the ring's decay moves the peak later)
     ev = next(s for s in found["shafts"] if s["shaft"] == strike.shaft)
     teeth = ev["tooth"][gear]
@@ -82,3 +83,16 @@ def test_a_synchronous_fault_is_named_as_before(box):
     found = W.which_gear(t, hist, table, None)
     assert found == W.which_gear(t, dataclasses.replace(hist, envelope=None), table, None)
     assert found["named"] is not None and "24T" in found["named"] and "seen" not in found, found["summary"]
+
+
+def test_the_envelope_names_nothing_where_another_shaft_s_average_is_near_its_threshold():
+    """A synchronous change under its threshold on one shaft leaks into another shaft's envelope: not named there."""
+
+    def ranked(other_z: float) -> L.Localisation:
+        shafts = (("input", 0.2), ("output", other_z))
+        ranking = tuple(L.ShaftEvidence(s, (), z, 1.0, z, 2.7, 5, False, s) for s, z in shafts)
+        return L.Localisation("", ranking, None, None)
+
+    assert E.elsewhere(ranked(0.9 * 2.7), "input")
+    assert not E.elsewhere(ranked(0.5 * 2.7), "input")
+    assert not E.elsewhere(ranked(0.9 * 2.7), "output")  # the envelope's own shaft: its average may read it too

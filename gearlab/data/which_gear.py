@@ -122,7 +122,7 @@ def which_gear(take: Take, hist: L.History, table, made: dict | None) -> dict:
             seen = E.localise(take.revolutions, hist.envelope, table, first)
         except GearlabInputError:
             return found.describe()
-        if seen.named is not None:
+        if seen.named is not None and not E.elsewhere(found, seen.named_shaft):
             return E.described(seen, found.summary())
     return found.describe()
 

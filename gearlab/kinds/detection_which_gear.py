@@ -83,6 +83,7 @@ def watched_gears(source: DatasetSpec, table) -> list[str]:
 
 
 ALSO = "; also other damage: "  # a record localised on a watched gear and on another
+ENVELOPE = "in the envelope: "  # before a record's z per shaft where they are its envelope's (signals.envelope_sync)
 
 
 def call_of(found: dict, watched: list[str], nonsync: dict | None = None, speed_hz: float | None = None) -> str:
@@ -161,6 +162,7 @@ def evidence(found: dict, nonsync: dict | None = None) -> str:
     threshold, strongest first, the tooth of the named shaft's gears, and the non-synchronous
     residual's z over its threshold with its strike order."""
     z = ", ".join(f"{s['shaft']} z {s['z']:.1f}/{s['threshold']:.1f}" for s in found["shafts"]) or found["summary"]
+    z = f"{ENVELOPE}{z}" if found.get("seen") == "envelope" else z  # the z are the envelope's, not the averages'
     tooth = _tooth(found)
     return z + ("" if tooth == "–" else f"; tooth {tooth}") + _which(found) + "; " + nonsync_words(nonsync)
 
@@ -455,6 +457,7 @@ def records_md(loc: dict, labels: dict, flagged: set[str]) -> str:
     ]
     for path, r in loc["records"].items():
         z = ", ".join(f"{s['shaft']} {s['z']:.1f}/{s['threshold']:.1f}" for s in r["shafts"])
+        z = f"{ENVELOPE}{z}" if r.get("seen") == "envelope" else z
         on = "; ".join(e["gear"] for e in W.flagged_shafts(r))  # every gear over its threshold, the named first
         # not read (a take too short for the check): said so, not 'nothing' beside a call with no evidence
         unread = not r["shafts"] and r.get("summary", "").startswith("not localised: ")
