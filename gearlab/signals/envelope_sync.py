@@ -40,9 +40,9 @@ ORDERS = (0.5, 24.0)  # input orders of the envelope read: a strike's envelope l
 BAND = 6.0  # input orders per band of the least squares over the order classes
 # The thresholds' Gaussian floor, shared among the shafts: a second search, read where the averages named nothing,
 # so a healthy take must hardly ever pass it. Healthy takes of the localisation benchmark's boxes read the envelope's
-# shafts at z 0.02 +- 0.94, the largest of 128 takes 3.08; at the averages' 0.01 (floor 2.71) 3 of them passed it,
-# and of 40 more one healthy take and one missed fault were named (dev seeds 52-53); a strike the averages cancel
-# reads z 17-370 at 0.5-2 of the mesh amplitude (tests/jittered_strikes.py)
+# shafts at z 0.02 +- 0.94, the largest of 128 takes 3.08, 3 over the averages' floor at 0.01 (2.71; dev seed 53);
+# at that floor the benchmark named one of 40 healthy takes and one fault on another shaft (dev seed 52); a strike the
+# averages cancel reads z 17-370 at 0.5-1 of the mesh amplitude (tests/jittered_strikes.py)
 FALSE_ALARM = 1e-4
 # A synchronous change under its threshold leaks into the envelope, and there may read on another shaft (a random
 # train's output-gear chip, its average at z 2.4 of 2.71, put the intermediate shaft's envelope at 4.34 over 3.99, dev
