@@ -16,25 +16,24 @@ a shaft's order set to zero. A record of fewer grand periods (tooth counts with 
 read in two pieces of whole periods of its meshes, its first turns and its last (read_turns), and each shaft
 order's nearest bin and its neighbours (LEAK) are removed.
 
-Evidence. The residual's squared envelope (|analytic signal|²), over its mean (a level in units of the
-residual's own power, so a louder take's noise does not read as a change), is read in blocks of
-BLOCK input revolutions (spectral resolution 1 / BLOCK orders) from LOW to HIGH input orders, each
-bin's power summed with its neighbours (a slipping strike's line spreads over a few bins) and read as
-its logarithm (a block's power is skewed, its log nearly Gaussian: healthy rig records' largest z
-2.9-4.5 against thresholds of 4.7-7.2, 36 records on 12 histories of 2; as powers 4.6-6.5 against 6.3,
-10 records on one, development seeds). A record's
-bins are the mean over its n blocks; against the healthy history's blocks, each bin's excess is read
-in sds of the mean of n history blocks, z(f) = (E(f) − μ_h(f)) √n / σ_h(f), σ_h pooled over SMOOTH
-neighbouring bins. The record's z is its largest. The strike order named is the lowest whose first
-HARMONICS harmonics' z sum within LOWEST of the most (the strongest line is often a harmonic, where the
-ring lies), read finer on the whole residual's envelope spectrum. The threshold is fixed on the history
-alone, as the shafts' are, for the maximum over the bins: the Gaussian quantile at FALSE_ALARM shared
-among the bins (Bonferroni) times the sd of the history records' line z, each read against the others
-(the records' spread beyond their blocks' noise), and at least the largest of those z (healthy rig
-records over it: 8 of 200 with the bare quantile as the floor, 1 of 200 so; 40 histories of 2,
-development seeds 300-339). One history take holds no records' spread: its threshold is Student's t on its
-blocks' degrees of freedom, for the noise of both takes' means (one_take_threshold; healthy rig records over it 0 of
-200, 154 over the bare quantile, the same seeds).
+Evidence. The residual's squared envelope (|analytic signal|²), over its mean (a level in units of the residual's
+own power, so a louder take's noise does not read as a change), is read in blocks of BLOCK input revolutions
+(spectral resolution 1 / BLOCK orders) from LOW to HIGH input orders, each bin's power summed with its neighbours (a
+slipping strike's line spreads over a few bins) and read as its logarithm (a block's power is skewed, its log nearly
+Gaussian: healthy rig records' largest z median 2.8, at most 5.5, against thresholds of 4.9-5.3, 200 records on 40
+histories of 2, development seeds). A record's bins are the mean over its n blocks; against the healthy history's N
+blocks, each bin's excess is in sds of the difference of the two means, z(f) = (E(f) − μ_h(f)) / (σ_h(f) √(1/n+1/N))
+(and the records' spread beyond their blocks' noise, line_z), σ_h pooled over SMOOTH neighbouring bins. The
+record's z is its largest. The strike order named is the lowest whose first HARMONICS harmonics' z sum within LOWEST
+of the most (the strongest line is often a harmonic, where the ring lies), read finer on the whole residual's
+envelope spectrum. The threshold is fixed on the history alone, as the shafts' are, for the maximum over the bins:
+Student's t quantile at FALSE_ALARM shared among the bins (Bonferroni, on the pooled sd's degrees of freedom:
+student_quantile) times the sd of the history records' line z, each read against the others (the records' spread
+beyond their blocks' noise), and at least the largest of those z (healthy rig records over it: 1 of 200; 40
+histories of 2, development seeds 300-339). One history take holds no records' spread: its threshold is the t
+quantile alone (one_take_threshold; healthy rig records over it 0 of 200, the same seeds). As z holds both means'
+noise, the threshold holds at every take's length (a 39/61 box's healthy 3, 6, 9 and 18 s takes against three 3 s
+history takes: 0, 0, 3 and 0 of 100 over it, development seeds 300-319).
 A gear fault is synchronous: the residual does not carry it (a simulated cracked tooth left z under
 the threshold, tests/test_nonsync.py); a bearing's strikes put a line at their order and its
 harmonics.
@@ -262,13 +261,9 @@ class NonSyncHistory:
     speeds: tuple[float, ...] = ()  # each record's mean input speed (Hz; none where not given): hum_or_bearing
 
     def threshold_for(self, blocks: int) -> float:
-        """The threshold on z of a take of *blocks* envelope blocks: of one history take (one_take_threshold), its
-        mean's noise beside the take's, sqrt(1 + blocks / n_h) where one_take_threshold's is for a take as long (a 30 s
-        take against a 3 s history: 3.5 x the take's noise, not 1.4; a 39/61 box's healthy 9 s takes against a 3 s one
-        over 10.7: 0 of 100, over 7.6: 23 of 100); else the threshold (the records' left-out spread carries it)."""
-        if len(self.blocks) > 1:
-            return self.threshold
-        return self.threshold * math.sqrt((1.0 + blocks / len(self.blocks[0])) / 2.0)
+        """The threshold on z of a take of *blocks* envelope blocks: the same at every length, as z carries the noise
+        of the take's mean and the history's both (line_z)."""
+        return self.threshold
 
     def state(self) -> dict:
         """Arrays to save (parts.scoring.save_arrays) and restore (restored)."""
@@ -383,7 +378,12 @@ def line_z(blocks: np.ndarray, reference: list[np.ndarray], synchronous: np.ndar
         means = np.array([r.mean(axis=0) for r in reference])
         beyond = means.var(axis=0, ddof=1) - var * np.mean([1.0 / len(r) for r in reference])
         between = np.clip(uniform_filter1d(beyond, size=BETWEEN, mode="nearest"), 0.0, None)
-    noise = var / len(blocks) + between
+    # the difference of two means, each with its noise: the take's (its blocks', and its record's spread beyond them)
+    # and the history's (its blocks' over all N, the records' spread weighted as the mean weights them: n_i / N). The
+    # history's left out, a take longer than its takes reads past the spread it had been scaled by (a 39/61 box's
+    # healthy 9 s takes against three 3 s ones: 20 of 100 over the threshold; 18 s: 81 of 100)
+    sizes = np.array([len(r) for r in reference], dtype=np.float64)
+    noise = var / len(blocks) + between + var / sizes.sum() + between * float(np.sum(sizes**2)) / sizes.sum() ** 2
     z = (blocks.mean(axis=0) - every.mean(axis=0)) / np.sqrt(np.maximum(noise, 1e-300))
     from scipy.ndimage import median_filter
 
@@ -442,11 +442,12 @@ def history(takes: list[np.ndarray], table, speeds: list[float] | None = None) -
     known = () if speeds is None else tuple(float(v) for v in speeds)
     if len(blocks) == 1:  # no records' spread to read: the blocks' noise alone
         return NonSyncHistory(blocks, one_take_threshold(blocks[0], table), known)
-    # the record's z is a maximum over the bins searched: its threshold is the family's, the Gaussian
-    # quantile at FALSE_ALARM shared among them (Bonferroni), in units of the spread of the history's own
-    # line z, each record against the others (it carries the records' spread beyond their blocks' noise,
-    # which the pooled sd underrates on a history of few records), and at least their largest
-    floor = NormalDist().inv_cdf(1.0 - FALSE_ALARM / int((~sync).sum()))
+    # the record's z is a maximum over the bins searched: its threshold is the family's, Student's t quantile at
+    # FALSE_ALARM shared among them (Bonferroni; the Gaussian's let 28 of 1000 synthetic healthy takes through against
+    # 3 takes of 4 blocks, t's 7: tests/test_nonsync_null.py), in units of the spread of the history's own line z,
+    # each record against the others (it carries the records' spread beyond their blocks' noise, which the pooled sd
+    # underrates on a history of few records), and at least their largest
+    floor = student_quantile(sum(len(b) for b in blocks) - len(blocks), int((~sync).sum()))
     left_out = []
     for i, b in enumerate(blocks):
         rest = [x for j, x in enumerate(blocks) if j != i]
@@ -458,24 +459,29 @@ def history(takes: list[np.ndarray], table, speeds: list[float] | None = None) -
 
 def one_take_threshold(blocks: np.ndarray, table) -> float:
     """The threshold on z of a history of one take, its envelope *blocks* (take_blocks), of the gearbox of order
-    table *table*, for a take as long as it (NonSyncHistory.threshold_for scales it to another's length)."""
+    table *table*."""
     # No second record: no spread between records to read, and none left out (history's threshold is the Gaussian
     # floor alone, 4.1: healthy rig takes over it 154 of 200, a 39/61 box's 33 of 50). Between two takes of the blocks'
-    # noise alone a bin's z (line_z: in sds of the take's mean) is Student's t, scaled: the history's mean carries the
-    # noise too (sd sqrt(1 + n / n_h), sqrt 2 at a take as long; measured 1.41 on those rig takes), and its sd rests on
-    # the history's n_h - 1 degrees of freedom a bin, pooled over SMOOTH bins that share their SUM neighbours (a bin
-    # correlates with the next as the 2 SUM + 1 bins they sum in common): nu = (n_h - 1) SMOOTH^2 / sum rho^2 over the
-    # window's pairs (13.8 at 4 blocks; the rig takes' z read as t at 15, past the Gaussian 3.7 at 1e-4: 4.9).
-    # Threshold 8.3 (4 blocks) and 7.6 (the 39/61 box's 5): over it 0 of 200 of each, development seeds 300-339.
-    # Cutting the take into halves, each left out against the other as history does for records, read the halves'
-    # noise (fewer blocks: spread 1.67, not 1.41) in the Gaussian floor: 6 of 200 over, where 2 are asked
+    # noise alone a bin's z (line_z: in sds of the difference of the two means) is Student's t on the history's
+    # n_h - 1 degrees of freedom a bin, pooled (student_quantile: nu 13.8 at 4 blocks; the rig takes' z read as t at
+    # 15, past the Gaussian 3.7 at 1e-4: 4.9). Threshold 5.9 (4 blocks) and 5.4 (the 39/61 box's 5): healthy rig takes
+    # over it 0 of 200, development seeds 300-339. Cutting the take into halves, each left out against the other as
+    # history does for records, read the halves' noise (fewer blocks) in the Gaussian floor: 6 of 200 over, where 2
+    # are asked
+    return student_quantile(len(blocks) - 1, int((~synchronous_bins(table, blocks.shape[1])).sum()))
+
+
+def student_quantile(dof: int, bins: int) -> float:
+    """Student's t quantile at FALSE_ALARM shared among *bins* (Bonferroni), on the degrees of freedom of a sd pooled
+    over SMOOTH bins of *dof* each (the history's blocks less its takes' means), bins that share their SUM neighbours:
+    a bin correlates with the next as the 2 SUM + 1 bins they sum in common, nu = dof SMOOTH^2 / sum rho^2 over the
+    window's pairs."""
     width, k = 2 * SUM + 1, np.arange(-(SMOOTH - 1), SMOOTH)
     rho = np.clip((width - np.abs(k)) / width, 0.0, None)
-    nu = (len(blocks) - 1) * SMOOTH**2 / float(np.sum((SMOOTH - np.abs(k)) * rho**2))
-    bins = int((~synchronous_bins(table, blocks.shape[1])).sum())
+    nu = dof * SMOOTH**2 / float(np.sum((SMOOTH - np.abs(k)) * rho**2))
     from scipy.stats import t as student  # here, not at the top: start-up time
 
-    return float(student.ppf(1.0 - FALSE_ALARM / bins, nu)) * math.sqrt(2.0)
+    return float(student.ppf(1.0 - FALSE_ALARM / bins, nu))
 
 
 def take_blocks(take: np.ndarray, table) -> np.ndarray:
