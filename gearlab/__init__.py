@@ -32,6 +32,7 @@ _API = dict.fromkeys(
         "detector_scores",
         "score_detector",
         "load_scenario",
+        "validate_scenario",
         "run_scenario",
         "open_run",
         "run_verdict",

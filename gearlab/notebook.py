@@ -46,6 +46,7 @@ __all__ = [
     "score_recordings",
     "simulate",
     "simulate_signals",
+    "validate_scenario",
 ]
 
 
@@ -596,6 +597,27 @@ def load_scenario(path: str | Path | None = None, *, run: RunDir | str | Path | 
     from .engine import load_scenario as load
 
     return load(path)
+
+
+def validate_scenario(path: str | Path) -> str:
+    """What ``gearlab validate`` (and the TUI's Validate) says of a scenario file or a gearbox description: its OK
+    line, a mistake raised as its one-line GearlabInputError. Beyond load_scenario's checks, the measured files are
+    read past their headers where that is cheap: a logger's footer is warned of, and a detection history whose
+    takes' tachos show it too short for its units is refused in the run's own line.
+
+    >>> Path("two.toml").write_text('[scenario]\\nname = "two"\\nkind = "dataset"\\n'
+    ...                             '[[datasets]]\\npreset = "B-6-ch5"\\nhealthy = 4\\n') and None
+    >>> gearlab.validate_scenario("two.toml")
+    "OK: two.toml: scenario 'two' (kind dataset); ..."
+    """
+    from .data.readers.headers import footers_said
+    from .gearbox import validated_description
+    from .kinds import SCENARIO_KINDS
+
+    if said := validated_description(Path(path)):  # a description alone was told 'missing table [scenario]'
+        return said
+    s = footers_said(lambda: load_scenario(path))
+    return f"OK: {path}: scenario '{s.name}' (kind {s.kind}); {SCENARIO_KINDS[s.kind].describe(s)}"
 
 
 def run_scenario(

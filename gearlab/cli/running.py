@@ -24,20 +24,9 @@ def validate(scenario: Annotated[Path, typer.Argument(help="scenario TOML file (
 
     Example: gearlab validate scenarios/expB.toml
     """
-    from ..data.readers.headers import footers_said
-    from ..gearbox import validated_description
-    from ..notebook import load_scenario
+    from ..notebook import validate_scenario
 
-    if not (said := validated_description(scenario)):  # a description alone was told 'missing table [scenario]'
-        s = footers_said(lambda: load_scenario(scenario))  # a logger's footer the run's reader leaves out: said
-        said = f"OK: {scenario}: scenario '{s.name}' (kind {s.kind}); {describe_spec(s)}"
-    console.print(said, markup=False)
-
-
-def describe_spec(s) -> str:
-    from ..kinds import SCENARIO_KINDS
-
-    return SCENARIO_KINDS[s.kind].describe(s)
+    console.print(validate_scenario(scenario), markup=False)
 
 
 Out = Annotated[

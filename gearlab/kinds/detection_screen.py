@@ -11,7 +11,7 @@ vibration). Where a condition's bound falls short, the takes are read as the run
 read_target), which refuses in the run's words; a tacho-less history (its speed in its vibration's mesh lines) is
 left to the run. A 60 s, 20 kHz CSV take's tacho column reads in 0.5 s, the take itself in 0.9 s; a 3 s take's in
 0.07 s and 0.18 s; phm09_chip's 8 zipped text history takes 4-5 s in all (its text parsed whole for one column), so
-a run, which reads them whole at once, the TUI and a comparison leave it out."""
+a run, which reads them whole at once, the TUI's tree and a comparison leave it out."""
 
 from __future__ import annotations
 

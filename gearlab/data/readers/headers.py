@@ -143,9 +143,10 @@ def footers_said(call):
 
 
 def validating() -> bool:
-    """Whether a scenario is read under footers_said (`gearlab validate`): the checks that read a measured file past
-    its header run then, not where a run, the TUI or a comparison reads the scenario (a detection history's tachos,
-    kinds.detection_screen: 4-5 s of phm09_chip's 8 zipped text takes, which a run reads whole anyway)."""
+    """Whether a scenario is read under footers_said (`gearlab validate`, the TUI's Validate): the checks that read a
+    measured file past its header run then, not where a run, the TUI's tree or a comparison reads the scenario (a
+    detection history's tachos, kinds.detection_screen: 4-5 s of phm09_chip's 8 zipped text takes, which a run reads
+    whole anyway)."""
     return _footers.get() is not None
 
 
