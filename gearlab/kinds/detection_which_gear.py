@@ -72,6 +72,7 @@ NOT_LOCALISED = f"{WATCHED} (not localised)"  # a flag with no evidence of where
 # watched gear's: a 2 s take with damage on another gear, flagged, was reported as the watched gear's fault
 UNDETERMINED = "fault, gear not determined"
 NOT_FLAGGED = "not flagged (no method's units over its threshold)"
+NOT_CALLED = "nothing called (no method's decision a fault)"  # a scored take's call where no method called it
 
 
 def watched_gears(source: DatasetSpec, table) -> list[str]:
