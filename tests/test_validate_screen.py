@@ -1,11 +1,14 @@
 """`gearlab validate` and the TUI's palette Validate say the same of a detection scenario: a history its takes'
-tachos show too short for its units (kinds.detection_screen) is refused by both, in the run's own line, where the
-TUI once said OK (gearlab.validate_scenario, the one check both call)."""
+tachos show too short for its units, or a test take whose tacho shows a run-up too short at its history's speed
+(kinds.detection_screen), is refused by both, in the run's own line, where the TUI once said OK
+(gearlab.validate_scenario, the one check both call)."""
 
 from __future__ import annotations
 
 from gearboxes import description, stage
 from test_csv_footer import _rows, _write
+from test_outside_fh import BOX as MILL
+from test_outside_fh import _sweep
 from test_score_keys import BOX, DETECT, record
 from test_tui import drive
 
@@ -62,3 +65,28 @@ def test_the_tui_s_validate_says_a_footer_as_the_cli_does(tmp_path, cli):
         assert notices == [(out.strip(), "valid"), (err.strip().removeprefix("warning: "), "warning")], notices
 
     drive(GearlabApp(folder), script)
+
+
+def test_validate_refuses_a_test_take_the_run_refuses_for_its_units_at_the_history_s_speed(tmp_path, cli):
+    # three steady 3 s history takes of a 39/61 box at 30 Hz and a 3 s test take sweeping 60 % about it: validate said
+    # OK, the run stopped at '... holds 7 of its 89 revolutions (7 in the band in all), a unit of every kind needs 30
+    # revolutions': the test take's tacho alone shows it, read as the history's are
+    (tmp_path / "box.toml").write_text(MILL)
+    for i in (1, 2, 3):
+        _sweep(tmp_path / f"h{i}.csv", i, sweep=0.0)
+    _sweep(tmp_path / "test.csv", 7, sweep=0.6)
+    (tmp_path / "run.toml").write_text(
+        '[scenario]\nname = "sweep"\nkind = "detection"\n[source]\ngearbox = "box.toml"\nfaults = { chip = [20] }\n'
+        '[target]\nvibration = "acc_gear_V"\ntacho = "tacho_V"\nsensitivity = "100 mV/g"\n'
+        'files = [{ file = "h*.csv", role = "history", label = "healthy" },\n'
+        '  { file = "test.csv", role = "test", label = "healthy" }]\n'
+        '[[methods]]\nadapter = "matched_filter"\n'
+    )
+    code, out, err = cli("run", tmp_path / "run.toml", "--quick", "--out", tmp_path / "runs")
+    (line,) = [x for x in err.splitlines() if "a unit of every kind needs" in x]
+    assert code == 2 and "test.csv (" in line and "holds 7 of its 89 revolutions" in line, err
+    code, out, said = cli("validate", tmp_path / "run.toml")
+    assert code == 2 and said.strip() == line, (said, line)
+    _sweep(tmp_path / "test.csv", 7, sweep=0.0)  # the same take steady: validate says OK
+    code, out, err = cli("validate", tmp_path / "run.toml")
+    assert code == 0 and out.startswith("OK: "), err

@@ -11,7 +11,13 @@ vibration). Where a condition's bound falls short, the takes are read as the run
 read_target), which refuses in the run's words; a tacho-less history (its speed in its vibration's mesh lines) is
 left to the run. A 60 s, 20 kHz CSV take's tacho column reads in 0.5 s, the take itself in 0.9 s; a 3 s take's in
 0.07 s and 0.18 s; phm09_chip's 8 zipped text history takes 4-5 s in all (its text parsed whole for one column), so
-a run, which reads them whole at once, the TUI's tree and a comparison leave it out."""
+a run, which reads them whole at once, the TUI's tree and a comparison leave it out.
+
+A test take's tacho is read alike where the history's read: a run-up or coast-down is cut at its condition's history
+speed as the run cuts it (detection_in_band.cut_run_ups), and one whose stretch there holds no unit is refused in the
+run's line (a 3 s take of the 39/61 drive sweeping 60 % about its 30 Hz history holds 7 of its 89 turns in the band,
+30 needed: validate said OK, the run stopped). A steady test take too short for a unit kind is no refusal: the run
+scores it 'not scored' for that kind."""
 
 from __future__ import annotations
 
@@ -24,7 +30,7 @@ from ..data.recordings import CutRecording, Recording, channel_key, read_content
 from ..errors import GearlabInputError
 from ..parts.measured import Target
 from ..signals.checks import revolution_speeds, speed_varies
-from .detection_in_band import steady_histories
+from .detection_in_band import cut_run_ups, steady_histories
 from .detection_records import HISTORY_STRIDES, MIN_HISTORY_UNITS, UnitShaft, conditions_of
 
 
@@ -52,9 +58,10 @@ def _from_tacho(target: Target, file) -> CutRecording | None:
 
 
 def history_short(target: Target, blocks, shaft: UnitShaft | None, where: str) -> bool:
-    """Whether the history takes' tachos alone show a condition's history too short for a unit kind (fewer than
+    """Whether the takes' tachos alone show a condition's history too short for a unit kind (fewer than
     MIN_HISTORY_UNITS units, or a take whose steady part holds none: detection_in_band.steady_histories), at the most
-    units its takes can give; False where a history take has no tacho or its tacho does not read (the run says why)."""
+    units its takes can give, or a test take's run-up too short at its history's speed (run_up_short); False where a
+    history take has no tacho or its tacho does not read (the run says why)."""
     history = [f for f in target.files if f.role == "history"]
     try:
         records = {f.path: _from_tacho(target, f) for f in history}
@@ -75,11 +82,36 @@ def history_short(target: Target, blocks, shaft: UnitShaft | None, where: str) -
             stride = max(1, b // HISTORY_STRIDES)
             key = (named[f.path], b)
             units[key] = units.get(key, 0) + len(range(0, n - b + 1, stride))
-    return any(count < MIN_HISTORY_UNITS for count in units.values())
+    return any(count < MIN_HISTORY_UNITS for count in units.values()) or run_up_short(
+        target, history, records, blocks, turns, where
+    )
+
+
+def run_up_short(target: Target, history, records: dict, blocks, turns: float, where: str) -> bool:
+    """Whether a test take's tacho shows a run-up or coast-down whose longest stretch at its condition's history speed
+    holds no unit (detection_in_band.cut_run_ups, on the test takes grouped with the *history* takes' steady *records*
+    as the run groups them); a test take without a tacho, or whose tacho does not read, is left to the run."""
+    tests = {}
+    for f in (f for f in target.files if f.role == "test"):
+        try:
+            rec = _from_tacho(target, f)
+        except GearlabInputError:
+            continue
+        if rec is not None:
+            tests[f] = rec
+    files = [*history, *tests]
+    held = {**records, **{f.path: rec for f, rec in tests.items()}}
+    named = conditions_of(files, {p: r.speed_hz for p, r in held.items()})
+    try:
+        cut_run_ups(files, held, named, blocks, turns, where)
+    except GearlabInputError:
+        return True
+    return False
 
 
 def screen_histories(target: Target, blocks, shaft: UnitShaft | None, where: str, read: Callable[[], object]) -> None:
-    """Refuse, in the run's own line, a history its tachos show too short for its units (history_short): *read*
-    reads the takes as the run does (detection_records.read_target), which raises it."""
+    """Refuse, in the run's own line, a history its tachos show too short for its units, or a test take's run-up too
+    short at its history's speed (history_short): *read* reads the takes as the run does (detection_records.
+    read_target), which raises it."""
     if history_short(target, blocks, shaft, where):
         read()
