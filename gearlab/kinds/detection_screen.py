@@ -1,5 +1,6 @@
-"""A detection scenario's history takes screened by `gearlab validate` (data.readers.headers.validating): a history too
-short for its units, known from each history take's tacho alone, is refused there in the run's own line.
+"""A detection scenario's takes screened by `gearlab validate` and the TUI's Validate (data.readers.headers.validating):
+a history too short for its units, or a test take's run-up too short at its history's speed, known from each take's
+tacho alone, is refused there in the run's own line.
 
 A history of three 3 s takes of a 39/61 drive sweeping 15 % about 30 Hz passed validate ('OK') and the run then
 stopped at 'gives 3 record30 units ...; expected at least 8' (each take's steady part, 32 of 89 turns, one record30
@@ -17,7 +18,8 @@ A test take's tacho is read alike where the history's read: a run-up or coast-do
 speed as the run cuts it (detection_in_band.cut_run_ups), and one whose stretch there holds no unit is refused in the
 run's line (a 3 s take of the 39/61 drive sweeping 60 % about its 30 Hz history holds 7 of its 89 turns in the band,
 30 needed: validate said OK, the run stopped). A steady test take too short for a unit kind is no refusal: the run
-scores it 'not scored' for that kind."""
+scores it 'not scored' for that kind. phm09_chip's validate, its 8 history and 16 test takes zipped text: 14 s (6 s
+with the history's alone), on a 2-core machine."""
 
 from __future__ import annotations
 
