@@ -209,12 +209,15 @@ def speed_from_mesh(
             w, on = weight[on_mesh[k]], on_mesh[k]
             speeds[k] = float(np.sum(w * x[on] * hm[k][on]) / np.sum(w * hm[k][on] ** 2))
         evidence, _, _, stages = explain(np.array(speeds), tol)
+        # every hypothesis's evidence at once (a row's sum is numpy's sum of that 1-D row), each line's frequency
+        # in words once, not some 1,000 sums and formattings a record one at a time (a call 22 -> 20 ms of CPU)
+        held, heard = np.sum(weight * evidence, axis=1).tolist(), [fmt_hz(v) for v in x[: min(12, x.size)]]
         for k, (i, s, h, _) in enumerate(tried):
             if not stages[k]:
                 continue  # a hypothesis must put a mesh harmonic on a carrier (not on sidebands only)
             # (evidence, speed, words, the stage, its mesh fundamental in Hz, the stages with a carrier on a mesh)
-            said = f"{fmt_hz(x[i])} as {h}×M{s.index}"
-            hypotheses.append((float(np.sum(weight * evidence[k])), speeds[k], said, s.index, x[i] / h, int(stages[k])))
+            said = f"{heard[i]} as {h}×M{s.index}"
+            hypotheses.append((held[k], speeds[k], said, s.index, x[i] / h, int(stages[k])))
 
     if declared is not None:
         # the declared speed, refined by the best hypothesis near it, unless the lines fit another speed
