@@ -29,7 +29,7 @@ from .sideband_combs import (
     train_wide,
     whole,
 )
-from .speed import DRIFT, EVIDENCE, MAX_HARMONIC, SPAN, Lines, carrier
+from .speed import DRIFT, EVIDENCE, MAX_HARMONIC, SPAN, Lines, carrier, hit_sums
 
 UNEXPLAINED_DB = -30.0  # unexplained lines listed down to this level below the strongest line
 # ... and, whatever their level against it, where they are no shaft's harmonic and stand this far over the
@@ -121,17 +121,10 @@ def _fits(x: np.ndarray, power: np.ndarray, tol: np.ndarray) -> tuple[list, np.n
     slack = np.repeat(tol[None, :] + tol[:, None] * x[None, :] / x[:, None], MAX_HARMONIC, axis=0)
     h = np.maximum(1.0, np.round(x[None, :] / rows[:, None]))
     hit = np.abs(x[None, :] - h * rows[:, None]) <= slack
-    count = hit.sum(axis=1)
-    first = np.argsort(~hit, axis=1, kind="stable")  # each row's hit lines first, in their order
-    num, den = power * h * x, power * h**2
+    upper, lower = hit_sums(hit, power * h * x, power * h**2)
     refit = list(rows)  # a row without a hit keeps its candidate
-    for n in np.unique(count[count > 0]):
-        at = np.flatnonzero(count == n)
-        take = first[at, :n]
-        upper = np.take_along_axis(num[at], take, axis=1).sum(axis=1)
-        m = upper / np.take_along_axis(den[at], take, axis=1).sum(axis=1)
-        for r, v in zip(at.tolist(), m.tolist()):
-            refit[r] = v
+    for r in np.flatnonzero(hit.any(axis=1)).tolist():
+        refit[r] = float(upper[r] / lower[r])
     m = np.array(refit, dtype=float)
     return refit, np.abs(x[None, :] - np.maximum(1.0, np.round(x[None, :] / m[:, None])) * m[:, None]) <= tol[None, :]
 
