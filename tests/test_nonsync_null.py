@@ -87,7 +87,7 @@ def test_a_history_of_one_take_holds_the_share_asked_on_takes_as_long_and_longer
         hist = NS.history([take(4)], table)
         for n in over:
             for _ in range(5):
-                over[n] += NS.line_z(take(n), list(hist.blocks), sync).max() > hist.threshold_for(n)
+                over[n] += NS.line_z(take(n), list(hist.blocks), sync).max() > hist.threshold
     # FALSE_ALARM 1 %: 10 of 1000 expected, more than 18 at under 1 % odds (binomial)
     assert all(k <= 18 for k in over.values()), f"healthy takes over the threshold of 1000 (by blocks): {over}"
 
@@ -128,7 +128,7 @@ def test_a_history_of_few_takes_holds_the_share_asked_on_takes_longer_than_its_o
     for _ in range(200):
         hist = NS.history([take(4) for _ in range(3)], table)
         for _ in range(5):
-            over += NS.line_z(take(12), list(hist.blocks), sync).max() > hist.threshold_for(12)
+            over += NS.line_z(take(12), list(hist.blocks), sync).max() > hist.threshold
             takes += 1
     # FALSE_ALARM 1 %: 10 of 1000 expected, more than 18 at under 1 % odds (binomial)
     assert over <= 18, f"{over} of {takes} healthy takes of 12 blocks over the threshold of a history of 3 x 4"

@@ -257,13 +257,8 @@ class NonSyncHistory:
     """The healthy history's envelope-spectrum blocks (one array per record) and the threshold on z."""
 
     blocks: tuple[np.ndarray, ...]
-    threshold: float
+    threshold: float  # the same at every take length: z carries the noise of the take's mean and the history's (line_z)
     speeds: tuple[float, ...] = ()  # each record's mean input speed (Hz; none where not given): hum_or_bearing
-
-    def threshold_for(self, blocks: int) -> float:
-        """The threshold on z of a take of *blocks* envelope blocks: the same at every length, as z carries the noise
-        of the take's mean and the history's both (line_z)."""
-        return self.threshold
 
     def state(self) -> dict:
         """Arrays to save (parts.scoring.save_arrays) and restore (restored)."""
@@ -520,9 +515,9 @@ def read_take(
     order = refined(r, np.shape(take)[-1], order)
     shaft = on_shaft(order, table)
     if speeds is None or len(speeds) != len(take) or harmonic(order * mean_speed(speeds)) is None:
-        return NonSync(z, order, hist.threshold_for(len(blocks)), shaft=shaft), lines
+        return NonSync(z, order, hist.threshold, shaft=shaft), lines
     locked = hum_or_bearing(r, np.shape(take)[-1], order, speeds, hist, table)
-    return NonSync(z, order, hist.threshold_for(len(blocks)), *locked, shaft=shaft), lines
+    return NonSync(z, order, hist.threshold, *locked, shaft=shaft), lines
 
 
 def mean_speed(speeds: np.ndarray) -> float:
