@@ -64,24 +64,32 @@ def test_the_slowest_shafts_wandering_mesh_sidebands_are_no_false_alarm(monkeypa
     assert over <= 40, f"{over} of {takes} healthy takes over the threshold"
 
 
+def _synthetic(monkeypatch, seed: int):
+    """(the rig's order table, its synchronous bins, a maker of a take's synthetic envelope blocks: Gaussian
+    log-powers of sd 0.6, each bin the sum of its SUM neighbours' as envelope_blocks sums them); a take is its
+    blocks."""
+    from scipy.ndimage import uniform_filter1d
+
+    table = order_table(gearbox_of(dataset_preset("phm09-30")))
+    f = NS.orders_of_bins(int(NS.HIGH * NS.BLOCK) - int(np.ceil(NS.LOW * NS.BLOCK)) + 1)
+    sync = NS.synchronous_bins(table, f.size)
+    rng = np.random.default_rng(seed)
+    width = 2 * NS.SUM + 1
+
+    def take(blocks: int) -> np.ndarray:
+        return uniform_filter1d(rng.normal(0.0, 0.6 * np.sqrt(width), (blocks, f.size)), size=width, axis=1)
+
+    monkeypatch.setattr(NS, "take_blocks", lambda blocks, table: blocks)
+    return table, sync, take
+
+
 def test_a_history_of_one_take_holds_the_share_asked_on_takes_as_long_and_longer(monkeypatch):
     """One healthy take, the least a user has: no records' spread to read. Synthetic envelope blocks (Gaussian
     log-powers of sd 0.6, each bin the sum of its SUM neighbours' as envelope_blocks sums them) of a 4-block history
     take, read with takes of 4 and of 16 blocks (a take 4 x as long: its mean's noise a quarter, the history's not).
     Over the bare Gaussian floor (4.1): 795 and 1000 of 1000 such takes; over the threshold of a take as long as the
     history's, the longer ones 273 of 1000; 10 and 7 of 1000 so."""
-    from scipy.ndimage import uniform_filter1d
-
-    table = order_table(gearbox_of(dataset_preset("phm09-30")))
-    f = NS.orders_of_bins(int(NS.HIGH * NS.BLOCK) - int(np.ceil(NS.LOW * NS.BLOCK)) + 1)
-    sync = NS.synchronous_bins(table, f.size)
-    rng = np.random.default_rng(1)
-    width = 2 * NS.SUM + 1
-
-    def take(blocks: int) -> np.ndarray:
-        return uniform_filter1d(rng.normal(0.0, 0.6 * np.sqrt(width), (blocks, f.size)), size=width, axis=1)
-
-    monkeypatch.setattr(NS, "take_blocks", lambda blocks, table: blocks)  # the takes are their blocks
+    table, sync, take = _synthetic(monkeypatch, 1)
     over = {4: 0, 16: 0}
     for _ in range(200):
         hist = NS.history([take(4)], table)
@@ -112,18 +120,7 @@ def test_a_history_of_few_takes_holds_the_share_asked_on_takes_longer_than_its_o
     history's own takes left out, is passed by healthy takes. Synthetic envelope blocks as the one-take test's;
     measured over the threshold: 206 of 1000 with the history's mean's noise left out of z, 21 with it in and the
     Gaussian quantile as the threshold's floor, 9 with Student's t's (takes of 4 blocks: 33, 28, 7)."""
-    from scipy.ndimage import uniform_filter1d
-
-    table = order_table(gearbox_of(dataset_preset("phm09-30")))
-    f = NS.orders_of_bins(int(NS.HIGH * NS.BLOCK) - int(np.ceil(NS.LOW * NS.BLOCK)) + 1)
-    sync = NS.synchronous_bins(table, f.size)
-    rng = np.random.default_rng(2)
-    width = 2 * NS.SUM + 1
-
-    def take(blocks: int) -> np.ndarray:
-        return uniform_filter1d(rng.normal(0.0, 0.6 * np.sqrt(width), (blocks, f.size)), size=width, axis=1)
-
-    monkeypatch.setattr(NS, "take_blocks", lambda blocks, table: blocks)  # the takes are their blocks
+    table, sync, take = _synthetic(monkeypatch, 2)
     over = takes = 0
     for _ in range(200):
         hist = NS.history([take(4) for _ in range(3)], table)

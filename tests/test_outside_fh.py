@@ -160,6 +160,18 @@ def _sweep(path, seed: int, seconds: float = 3.0, f0: float = 30.0, sweep: float
     path.write_text("time_s,acc_gear_V,tacho_V\n" + rows + "\n")
 
 
+def _sweep_scenario(path) -> None:
+    """A detection scenario at *path* of the box.toml beside it: h*.csv the history, test.csv a test take (_sweep's
+    columns)."""
+    path.write_text(
+        '[scenario]\nname = "sweep"\nkind = "detection"\n[source]\ngearbox = "box.toml"\nfaults = { chip = [20] }\n'
+        '[target]\nvibration = "acc_gear_V"\ntacho = "tacho_V"\nsensitivity = "100 mV/g"\n'
+        'files = [{ file = "h*.csv", role = "history", label = "healthy" },\n'
+        '  { file = "test.csv", role = "test", label = "healthy" }]\n'
+        '[[methods]]\nadapter = "matched_filter"\n'
+    )
+
+
 def test_a_sweeping_history_take_s_speed_is_said_as_the_run_read_it(tmp_path, cli):
     # three 3 s history takes sweeping 15 % about 30 Hz: each printed '30.771 Hz, from tacho ...; 27.9 Hz .. 32.09 Hz
     # over the take: a run-up or coast-down? its mean speed is its condition (steady records compare)', where 30.77 Hz
@@ -168,13 +180,7 @@ def test_a_sweeping_history_take_s_speed_is_said_as_the_run_read_it(tmp_path, cl
     (tmp_path / "box.toml").write_text(BOX)
     for i in (1, 2, 3, 4):
         _sweep(tmp_path / (f"h{i}.csv" if i < 4 else "test.csv"), i)
-    (tmp_path / "run.toml").write_text(
-        '[scenario]\nname = "sweep"\nkind = "detection"\n[source]\ngearbox = "box.toml"\nfaults = { chip = [20] }\n'
-        '[target]\nvibration = "acc_gear_V"\ntacho = "tacho_V"\nsensitivity = "100 mV/g"\n'
-        'files = [{ file = "h*.csv", role = "history", label = "healthy" },\n'
-        '  { file = "test.csv", role = "test", label = "healthy" }]\n'
-        '[[methods]]\nadapter = "matched_filter"\n'
-    )
+    _sweep_scenario(tmp_path / "run.toml")
     code, out, err = cli("run", tmp_path / "run.toml", "--quick", "--out", tmp_path / "runs")
     said = [line for line in (out + err).splitlines() if line.startswith("h1.csv: ")]
     assert code == 2 and "expected at least 8" in err, err

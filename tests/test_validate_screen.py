@@ -8,7 +8,7 @@ from __future__ import annotations
 from gearboxes import description, stage
 from test_csv_footer import _rows, _write
 from test_outside_fh import BOX as MILL
-from test_outside_fh import _sweep
+from test_outside_fh import _sweep, _sweep_scenario
 from test_score_keys import BOX, DETECT, record
 from test_tui import drive
 
@@ -16,6 +16,22 @@ from gearlab.tui import GearlabApp
 
 HISTORY = '{ file = "h.csv", role = "history", label = "healthy" }'
 TEST = '{ file = "t.csv", role = "test", label = "healthy" }'
+
+
+def _palette_validate(folder) -> list[tuple[str, str]]:
+    """(message, title) of each notice the TUI's palette 'Validate s.toml' shows, in *folder*."""
+    notices = []
+
+    async def script(pilot):
+        app = pilot.app
+        notify = app.notify
+        app.notify = lambda message, **kw: notices.append((message, kw.get("title"))) or notify(message, **kw)
+        (entry,) = [e for e in app.entries if e.path.name == "s.toml"]
+        app._validate(entry)
+        await pilot.pause()
+
+    drive(GearlabApp(folder), script)
+    return notices
 
 
 def test_the_tui_s_validate_refuses_a_short_history_as_the_cli_does(tmp_path, cli):
@@ -31,16 +47,7 @@ def test_the_tui_s_validate_refuses_a_short_history_as_the_cli_does(tmp_path, cl
     assert code == 2 and "expected at least 8" in err, (out, err)
     refusal = err.strip().removeprefix("error: ")
 
-    async def script(pilot):
-        app = pilot.app
-        notices, notify = [], app.notify
-        app.notify = lambda message, **kw: notices.append((message, kw.get("title"))) or notify(message, **kw)
-        (entry,) = [e for e in app.entries if e.path.name == "s.toml"]
-        app._validate(entry)
-        await pilot.pause()
-        assert notices == [(refusal, "invalid")], notices
-
-    drive(GearlabApp(folder), script)
+    assert _palette_validate(folder) == [(refusal, "invalid")]
 
 
 def test_the_tui_s_validate_says_a_footer_as_the_cli_does(tmp_path, cli):
@@ -55,16 +62,7 @@ def test_the_tui_s_validate_says_a_footer_as_the_cli_does(tmp_path, cli):
     code, out, err = cli("validate", folder / "s.toml")
     assert code == 0 and err.startswith("warning: ") and "End of data" in err, (out, err)
 
-    async def script(pilot):
-        app = pilot.app
-        notices, notify = [], app.notify
-        app.notify = lambda message, **kw: notices.append((message, kw.get("title"))) or notify(message, **kw)
-        (entry,) = [e for e in app.entries if e.path.name == "s.toml"]
-        app._validate(entry)
-        await pilot.pause()
-        assert notices == [(out.strip(), "valid"), (err.strip().removeprefix("warning: "), "warning")], notices
-
-    drive(GearlabApp(folder), script)
+    assert _palette_validate(folder) == [(out.strip(), "valid"), (err.strip().removeprefix("warning: "), "warning")]
 
 
 def test_validate_refuses_a_test_take_the_run_refuses_for_its_units_at_the_history_s_speed(tmp_path, cli):
@@ -75,13 +73,7 @@ def test_validate_refuses_a_test_take_the_run_refuses_for_its_units_at_the_histo
     for i in (1, 2, 3):
         _sweep(tmp_path / f"h{i}.csv", i, sweep=0.0)
     _sweep(tmp_path / "test.csv", 7, sweep=0.6)
-    (tmp_path / "run.toml").write_text(
-        '[scenario]\nname = "sweep"\nkind = "detection"\n[source]\ngearbox = "box.toml"\nfaults = { chip = [20] }\n'
-        '[target]\nvibration = "acc_gear_V"\ntacho = "tacho_V"\nsensitivity = "100 mV/g"\n'
-        'files = [{ file = "h*.csv", role = "history", label = "healthy" },\n'
-        '  { file = "test.csv", role = "test", label = "healthy" }]\n'
-        '[[methods]]\nadapter = "matched_filter"\n'
-    )
+    _sweep_scenario(tmp_path / "run.toml")
     code, out, err = cli("run", tmp_path / "run.toml", "--quick", "--out", tmp_path / "runs")
     (line,) = [x for x in err.splitlines() if "a unit of every kind needs" in x]
     assert code == 2 and "test.csv (" in line and "holds 7 of its 89 revolutions" in line, err
