@@ -78,11 +78,19 @@ def localisation(path: str, history: list, box: Gearbox, options: InspectOptions
     pulses = options.pulses_per_rev or box.sensor.pulses_per_rev
     try:  # a history too short for it is said, as a detection run says it (detection_which_gear)
         hist = W.history_of(takes, table, marks=max(k for *_, k, _, _, _ in past), tacho=tacho, pulses=pulses)
-        out = W.which_gear(W.Take(revs, first, speed.mean_hz, fs), hist, table, W.events(box.source))
     except GearlabInputError as exc:
-        out = {"method": "", "named": None, "named_shaft": None, "summary": f"not localised: {exc}", "shafts": []}
+        hist = exc
+    ns = nonsync_lines(revs, [t.revolutions for t in takes], table, speed.mean_hz, turns, takes)
+    if isinstance(hist, GearlabInputError):
+        out = {"method": "", "named": None, "named_shaft": None, "summary": f"not localised: {hist}", "shafts": []}
+    else:  # a non-synchronous call sets the envelope aside, as a detection run does (data.which_gear)
+        take = W.Take(revs, first, speed.mean_hz, fs)
+        try:
+            out = W.which_gear(take, hist, table, W.events(box.source), envelope=not ns.get("changed"))
+        except GearlabInputError as exc:
+            out = {"method": "", "named": None, "named_shaft": None, "summary": f"not localised: {exc}", "shafts": []}
     out["history"] = [p for p, _ in read]
-    out["nonsync"] = nonsync_lines(revs, [t.revolutions for t in takes], table, speed.mean_hz, turns, takes)
+    out["nonsync"] = ns
     out["call"] = call_of(out, out["nonsync"], speed.mean_hz)
     # a take at another load than its history's: its call said beside the level, as a run and score warn of it (a 38/103
     # box's healthy take at 1.5 x its one-load history's mesh level read 'localised change: input pinion 38T', no more)

@@ -96,3 +96,27 @@ def test_the_envelope_names_nothing_where_another_shaft_s_average_is_near_its_th
     assert E.elsewhere(ranked(0.9 * 2.7), "input")
     assert not E.elsewhere(ranked(0.5 * 2.7), "input")
     assert not E.elsewhere(ranked(0.9 * 2.7), "output")  # the envelope's own shaft: its average may read it too
+
+
+def test_a_bearing_s_strikes_at_no_shaft_order_are_not_named_a_gear_in_the_envelope():
+    # the rig at 50 Hz, two healthy history takes, a take of strikes at input order 4.208 (development seed 17 of the
+    # non-synchronous sensitivity check): over the non-synchronous threshold (13.9 / 5.5), and the envelope, lifted at
+    # every order by the strikes, named the output gear 80T first ('other damage: output gear 80T (in the envelope:
+    # ...)'); a strike at no shaft's order is a bearing's: called non-synchronous, the envelope set aside
+    from test_nonsync import NON_SYNC, strikes
+    from which_gear_takes import cut, rig_condition
+
+    from gearlab.data.simulated import simulated_record
+    from gearlab.data.spec import dataset_preset
+
+    files = {"h1": ("history", "healthy", [], 1700), "h2": ("history", "healthy", [], 1701)}
+    files["ok"] = ("test", "healthy", [], 1704)
+    cond, _ = rig_condition(files, 50.0, 80)
+    rec = simulated_record([], speed_hz=50.0, revolutions=80, snr_db=30.0, seed=1711)
+    cond["raw"]["race"] = (cut(strikes(rec, 4.208, 0.015, 0.3, seed=1721)), 0)
+    cond["test"].append(
+        (dataclasses.replace(cond["test"][0][0], path="race", resolved="race", label="outer race"), None)
+    )
+    found = D.localise_target(dataset_preset("phm09-30"), {"50 Hz": cond})["records"]["race"]
+    assert found["nonsync"]["changed"] and found["call"].startswith(NON_SYNC), found["call"]
+    assert found.get("seen") != "envelope" and "in the envelope" not in found["call"], found["call"]

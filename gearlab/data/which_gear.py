@@ -96,12 +96,15 @@ def templates_for(table, made: dict | None, take: Take):
     return record_templates(table, made["preset"], take.speed_hz, take.fs, made["effects"])
 
 
-def which_gear(take: Take, hist: L.History, table, made: dict | None) -> dict:
+def which_gear(take: Take, hist: L.History, table, made: dict | None, envelope: bool = True) -> dict:
     """*take* localised against *hist* (signals.localise.Localisation.describe()): the shafts ranked by
     their z, the gear named first (or None) with its evidence; a two-gear shaft's gear by the events
     *made* simulates (events(); None: by the event's width). A record that cannot be read against the
     history is said so ("not localised: ..."), not fatal; one too short for it carries 'unread' (its slowest
-    shaft's turns, that shaft, the turns needed)."""
+    shaft's turns, that shaft, the turns needed).
+    *envelope*: False where the take's non-synchronous check calls (signals.nonsync): a strike at no shaft's order
+    lifts the residual's envelope at every order, so the envelope names no shaft (bearing strikes at random orders were
+    called a gear's fault first on 13 of 40 fresh takes, the watched input pinion on 4; synchronous calls unchanged)."""
     turns, shaft = NS.slowest_turns(len(take.revolutions), table)
     # each shaft's own average (signals.nonsync), or two grand periods (signals.localise), in turns of the slowest shaft
     lay = hist.layout
@@ -117,7 +120,9 @@ def which_gear(take: Take, hist: L.History, table, made: dict | None) -> dict:
         found = L.localise(take.revolutions, hist, table, first, templates=templates_for(table, made, take))
     except GearlabInputError as exc:
         return NOT_READ | {"summary": f"not localised: {exc}"}
-    if found.named is None and hist.envelope is not None:  # nothing synchronous: a strike the averages cancel?
+    if (
+        found.named is None and envelope and hist.envelope is not None
+    ):  # nothing synchronous: a strike the averages cancel?
         try:
             seen = E.localise(take.revolutions, hist.envelope, table, first)
         except GearlabInputError:

@@ -250,9 +250,10 @@ def localise_target(
             histories[name] = (hist, quiet)
         for f, _ in cond["test"]:
             take = takes[f.path]
-            found = W.which_gear(take, hist, table, None if take.speed_hz is None or take.fs is None else made)
-            found["turned"] = cond.get("turned", {}).get(f.path, 0)  # read off its tacho's mark: turned_tooth
             ns = nonsync_of(take.revolutions, quiet, table, take.speeds)
+            made_here = None if take.speed_hz is None or take.fs is None else made
+            found = W.which_gear(take, hist, table, made_here, envelope=not (ns or {}).get("changed"))
+            found["turned"] = cond.get("turned", {}).get(f.path, 0)  # read off its tacho's mark: turned_tooth
             call = call_of(found, watched, ns, take.speed_hz)
             out["records"][f.path] = {"condition": name, **found, "nonsync": ns, "call": call}
     return out
@@ -337,8 +338,9 @@ def localise_scored(run, records: dict[str, list], turned: dict[str, int] | None
         # a run stored before the events' simulator was said: the source's description, no effects
         made = meta.get("events", W.events(meta["preset"]))
         for path, take in recs:
-            found = W.which_gear(take, hist, table, made) | {"turned": (turned or {}).get(path, 0)}
             ns = nonsync_of(take.revolutions, quiet, table, take.speeds)
+            found = W.which_gear(take, hist, table, made, envelope=not (ns or {}).get("changed"))
+            found["turned"] = (turned or {}).get(path, 0)
             out[path] = {
                 "named": W.named_gears(found),  # damage on two shafts: both, as the run's table names them
                 "summary": found["summary"],
