@@ -23,7 +23,8 @@ def _scenario(files: str, target: str = 'vibration = "acc_V"\ntacho = "tacho_V"\
 
 
 def _csv(path, fs: float, n: int, time_name: str = "time_s", scale: float = 1.0) -> None:
-    x = np.sin(np.arange(n) * 0.37)
+    # the 54/107 reducer's mesh: its output tacho (60 marks) pulses every 40 samples, 20 Hz at 48 kHz: 2140 Hz
+    x = np.sin(2 * np.pi * 107 * np.arange(n) / 2400) + 0.05 * np.random.default_rng(n).normal(size=n)
     rows = "".join(f"{i / fs * scale:.7f};{a:.6f};{(i % 40 < 8) * 5.0:.1f}\n" for i, a in enumerate(x))
     rows = rows.replace(".", ",")
     path.write_text(f"{time_name};acc_V;tacho_V\n" + rows)
@@ -40,10 +41,11 @@ def test_a_time_column_named_as_loggers_name_it_gives_the_rate(tmp_path, cli):
         assert time_scale(name) == scale, name
     assert time_scale("X_Value") == 1.0 and time_scale("Elapsed time [us]") == 1e-6
     assert time_scale("Absolute Time") is None and time_scale("temperature") is None
-    _csv(tmp_path / "a.csv", 48000.0, 3000, "Relative Time (s)")
-    _csv(tmp_path / "b.csv", 48000.0, 3000, "Relative Time (ms)", 1e3)
+    # takes long enough for a history's units (validate reads the history's tacho as the run counts them)
+    _csv(tmp_path / "a.csv", 48000.0, 72000, "Relative Time (s)")
+    _csv(tmp_path / "b.csv", 48000.0, 72000, "Relative Time (ms)", 1e3)
     contents, _ = read_contents(tmp_path / "a.csv", ["acc_V"])
-    assert [abs(t[-1] - 2999 / 48000.0) < 1e-6 for _, t in contents.times] == [True], contents.times
+    assert [abs(t[-1] - 71999 / 48000.0) < 1e-6 for _, t in contents.times] == [True], contents.times
     (tmp_path / "k.toml").write_text(BOX_K.format(z=54))
     files = '[{ file = "a.csv", role = "history", label = "healthy" }, '
     files += '{ file = "b.csv", role = "test", label = "fault" }]'

@@ -144,7 +144,7 @@ def test_a_two_stage_output_tacho_of_no_whole_input_turns_gives_the_input_revolu
 def test_a_wrong_tacho_shaft_is_one_line_at_validate(tmp_path, cli, write_scenario):
     (tmp_path / "rig16.toml").write_text(RIG16.read_text())
     for name in ("h0", "h1", "t0", "t1"):
-        record(tmp_path / f"{name}.csv", Fraction(1, 3), seconds=0.5)
+        record(tmp_path / f"{name}.csv", Fraction(1, 3), seconds=1.2)  # 8 units: validate reads the tachos
     text = DETECT.format(name="bad", folder=".", shaft='tacho_shaft = "outptu"')
     code, _, err = cli("validate", write_scenario(text, "bad.toml"))
     assert code == 2 and len(err.strip().splitlines()) == 1

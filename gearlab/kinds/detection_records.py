@@ -46,6 +46,26 @@ def varies(how: str) -> str:
     return f" ({how.split('; ')[-1]})" if VARIES_WORDS in how or UNSEEN_WORDS in how else ""
 
 
+def too_few_units(where: str, name: str, cond: dict, shaft, count: int, unit: str) -> str:
+    """The line refusing condition *name*'s history of *count* '*unit*' units (MIN_HISTORY_UNITS needed), with its
+    longest record's turns of the units' *shaft* and the steady part of each take cut to one."""
+    longest = max(len(r) for _, r in cond["history"])
+    on = "" if shaft is None else f" {shaft.name}-shaft"
+    # a take cut to its steady part: how much of it, here (validate refuses it too, before any log line)
+    used = cond.get("scored_on", {})
+    cut = [
+        f"{f.path}: " + used[f.path].removeprefix("used ").removesuffix(" (steady part)")
+        for f, _ in cond["history"]
+        if f.path in used
+    ]
+    steady = f"; steady parts used: {', '.join(cut)}" if cut else ""
+    return (
+        f"{where}: the history of condition '{name}' gives {count} '{unit}' units "
+        f"(its longest record has {longest}{on} revolutions{steady}); expected at least "
+        f"{MIN_HISTORY_UNITS}: longer records, or shorter [detection] blocks"
+    )
+
+
 @dataclass(frozen=True)
 class UnitShaft:
     """The shaft whose revolutions the detection's units are (unit_shaft): its name, its turns per
@@ -401,6 +421,8 @@ def read_target(
         if shaft is not None:  # the units: that shaft's revolutions, in the records' band
             for role in ROLES:
                 cond[role] = [(f, shaft.revolutions(r, cond["max_order"])) for f, r in cond[role]]
+        if not any(len(r) for _, r in cond["history"]):  # not one turn of the units' shaft (a slow output, short takes)
+            raise GearlabInputError(too_few_units(where, name, cond, shaft, 0, "revolution"))
         standardiser = Standardiser.fit(np.concatenate([r for _, r in cond["history"]]))
         reference = standardiser.apply(cond["history"][0][1]).mean(axis=0)
         cond["standardiser"], cond["reference"] = standardiser, reference  # kept for gearlab score
@@ -443,21 +465,7 @@ def read_target(
                 # 19/47 + 29/71 reducer's output tacho read as the input's: '2 record30 units ... longer records')
                 if structure is not None and (differs := structure({name: cond})):
                     raise GearlabInputError(differs)
-                longest = max(len(r) for _, r in cond["history"])
-                on = "" if shaft is None else f" {shaft.name}-shaft"
-                # a take cut to its steady part: how much of it, here (validate refuses it too, before any log line)
-                used = cond.get("scored_on", {})
-                cut = [
-                    f"{f.path}: " + used[f.path].removeprefix("used ").removesuffix(" (steady part)")
-                    for f, _ in cond["history"]
-                    if f.path in used
-                ]
-                steady = f"; steady parts used: {', '.join(cut)}" if cut else ""
-                raise GearlabInputError(
-                    f"{where}: the history of condition '{name}' gives {len(X)} '{u}' units "
-                    f"(its longest record has {longest}{on} revolutions{steady}); expected at least "
-                    f"{MIN_HISTORY_UNITS}: longer records, or shorter [detection] blocks"
-                )
+                raise GearlabInputError(too_few_units(where, name, cond, shaft, len(X), u))
         for f, r in cond["test"]:
             short = short_blocks(len(r), blocks)
             if short and shaft is not None:  # a record of no unit of a kind: nothing to score it by
