@@ -105,7 +105,7 @@ def test_a_healthy_take_of_a_two_stage_box_read_whole_is_not_called_bearing_like
     # result, nothing named, is what the call reads then too. The files, their reading and the
     # non-synchronous history and call are inspect's own.
     monkeypatch.setattr(W, "history_of", lambda *args, **kwargs: None)
-    monkeypatch.setattr(W, "which_gear", lambda *args: {"named": None})
+    monkeypatch.setattr(W, "which_gear", lambda *args, **kw: {"named": None})
     (tmp_path / "boxQ.toml").write_text(BOX_Q)
     takes = [_box_q_take(tmp_path / f"q{seed}.npz", seed) for seed in (1, 2, 3, 4, 5)]
     history = [a for h in takes[:3] for a in ("--history", h)]
@@ -129,7 +129,7 @@ def test_a_bearing_striking_at_two_meshes_combination_is_named_at_its_own_order(
     from gearlab.data import which_gear as W
 
     monkeypatch.setattr(W, "history_of", lambda *args, **kwargs: None)  # as above: the non-synchronous call alone
-    monkeypatch.setattr(W, "which_gear", lambda *args: {"named": None})
+    monkeypatch.setattr(W, "which_gear", lambda *args, **kw: {"named": None})
     (tmp_path / "boxQ.toml").write_text(BOX_Q)
     history = [a for seed in (1, 2, 3) for a in ("--history", _box_q_take(tmp_path / f"q{seed}.npz", seed))]
     order = 27 - 3 * 27 * 18 / 61 + 27 / 61
