@@ -9,8 +9,6 @@ import numpy as np
 import pytest
 from textrecords import PULSES, rig_record
 
-PHM09 = Path(__file__).resolve().parents[2] / "shared" / "data" / "phm09"
-
 
 def test_records_without_condition_join_the_history_of_nearest_speed():
     from gearlab.kinds.detection_records import TargetFile, conditions_of
@@ -52,13 +50,6 @@ def test_a_declared_speed_in_rpm_is_turns_per_minute():
     assert quantity({"speed": "1680 rpm"}, "speed", "w") == pytest.approx(28.0)
     with pytest.raises(GearlabInputError, match=r"^w: expected an input-shaft speed up to 1 kHz"):
         speed_of("2 kHz", "w")
-
-
-@pytest.mark.skipif(not PHM09.is_dir(), reason="the PHM 2009 records (../shared/data/phm09) are not here")
-def test_shipped_phm09_scenario_validates(cli):
-    code, out, err = cli("validate", Path(__file__).resolve().parents[1] / "scenarios" / "phm09_chip.toml")
-    assert code == 0, err
-    assert "24 measured records (8 history, 16 test)" in out
 
 
 def test_the_shipped_scenario_takes_another_file_list_of_the_rig(tmp_path, monkeypatch):
