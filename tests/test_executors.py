@@ -131,28 +131,9 @@ def test_no_items_no_work(executor):
     assert executor.map(square, [], lambda i, r: pytest.fail("nothing to report")) == []
 
 
-def test_a_gearlab_input_error_arrives_as_itself(executor):
-    with pytest.raises(GearlabInputError, match="item 3 is not allowed") as info:
-        executor.map(refuse_three, range(5))
-    assert type(info.value) is GearlabInputError  # not a Ray wrapper class
-
-
-def test_other_errors_keep_their_type(executor):
-    with pytest.raises(ZeroDivisionError):
-        executor.map(divide, [1, 0, 2])
-
-
 def test_gpu_request_changes_no_result(executor):
     """Local executors ignore it; a Ray cluster without GPUs asks for none."""
     assert executor.map(square, range(4), gpu=True) == [0, 1, 4, 9]
-
-
-def test_a_failing_callback_stops_the_map(executor):
-    def stop(i, r):
-        raise RuntimeError("cancelled")
-
-    with pytest.raises(RuntimeError, match="cancelled"):
-        executor.map(square, range(4), stop)
 
 
 def read_shared(item) -> tuple[int, float]:
@@ -182,6 +163,29 @@ def a_shared_value():
 def test_a_shared_value_reaches_every_unit_as_itself(executor):
     shared, total = a_shared_value()
     assert executor.map(read_shared, [(i, shared) for i in range(3)]) == [(i, total) for i in range(3)]
+
+
+# The maps that fail come last: a failed map stops the pool the local-2 tests share (two_local_workers),
+# and the next map starts its two workers again (1 s of CPU on 2 cores).
+
+
+def test_a_gearlab_input_error_arrives_as_itself(executor):
+    with pytest.raises(GearlabInputError, match="item 3 is not allowed") as info:
+        executor.map(refuse_three, range(5))
+    assert type(info.value) is GearlabInputError  # not a Ray wrapper class
+
+
+def test_other_errors_keep_their_type(executor):
+    with pytest.raises(ZeroDivisionError):
+        executor.map(divide, [1, 0, 2])
+
+
+def test_a_failing_callback_stops_the_map(executor):
+    def stop(i, r):
+        raise RuntimeError("cancelled")
+
+    with pytest.raises(RuntimeError, match="cancelled"):
+        executor.map(square, range(4), stop)
 
 
 def test_the_local_pool_sends_a_shared_value_once_and_each_unit_has_its_own(monkeypatch, tmp_path):
