@@ -325,22 +325,28 @@ KEYS = sorted(
 )
 TABLES = sorted({"scenario", "output", "execution", *(name for m in SCENARIO_KINDS.values() for name in m.TABLES)})
 
+# Any character but a lone surrogate: st.text's own alphabet (characters(codec="utf-8")), the same intervals and
+# the same examples, without the table of what UTF-8 encodes that hypothesis first builds by trying each of the
+# 1.1 million code points (1.8 s of CPU in a clone whose .hypothesis folder does not have it yet).
+TEXT = st.characters(exclude_categories=("Cs",))
+
 scalars = st.one_of(
     st.sampled_from(NUMBERS),
     st.integers(),
     st.floats(),
     st.booleans(),
     st.sampled_from(WORDS + UNIT_TEXTS),
-    st.text(max_size=12),
+    st.text(TEXT, max_size=12),
 )
 values = st.recursive(
     scalars,
     lambda inner: st.one_of(
-        st.lists(inner, max_size=4), st.dictionaries(st.sampled_from(KEYS) | st.text(max_size=8), inner, max_size=4)
+        st.lists(inner, max_size=4),
+        st.dictionaries(st.sampled_from(KEYS) | st.text(TEXT, max_size=8), inner, max_size=4),
     ),
     max_leaves=8,
 )
-keys = st.sampled_from(KEYS) | st.text(max_size=10)
+keys = st.sampled_from(KEYS) | st.text(TEXT, max_size=10)
 
 
 def places(node, found=None) -> list[tuple[object, object]]:
@@ -398,7 +404,7 @@ def mutated_scenarios(draw) -> dict:
             if op == "add":
                 table[draw(keys)] = draw(values)
             elif op == "quantity":  # a quantity, with or without its unit, of any text
-                table[rnd.choice(QUANTITIES)] = draw(st.sampled_from(UNIT_TEXTS + NUMBERS) | st.text(max_size=12))
+                table[rnd.choice(QUANTITIES)] = draw(st.sampled_from(UNIT_TEXTS + NUMBERS) | st.text(TEXT, max_size=12))
             elif table:
                 table[draw(keys)] = table.pop(rnd.choice(sorted(table)))
     return doc
@@ -417,7 +423,7 @@ def random_scenarios(draw) -> dict:
             )
         )
     }
-    for name in draw(st.lists(st.sampled_from(TABLES) | st.text(max_size=6), max_size=5)):
+    for name in draw(st.lists(st.sampled_from(TABLES) | st.text(TEXT, max_size=6), max_size=5)):
         table = st.dictionaries(keys, values, max_size=6)
         doc[name] = draw(st.lists(table, max_size=3) if draw(st.booleans()) else table)
     return doc
