@@ -76,7 +76,7 @@ from .inspect_axes import stronger_axis
 from .inspect_tacho import elsewhere_line, marks_line, reversal_notes, shaft_and_marks, speed_channel
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho, upsampled
 from .signals.checks import fmt_hz
-from .signals.fixed_lines import fixed_on_orders, modulation_pairs, smear_merged
+from .signals.fixed_lines import fixed_on_orders, modulation_pairs, modulation_words, smear_merged
 from .signals.nonsync import TURNS
 from .signals.spikes import acquisition
 
@@ -517,7 +517,7 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions, read
         if not options.check_only:  # lines no difference rests on: not for a check alone (40 s of a 60 s take's 68)
             listed += fixed_on_orders(listed, lines, order_table(box), take, speed.mean_hz, bin_)
         swing = report["speed"]["variation_percent"] / 100  # a line in a stronger one's smear is its skirt, not a line
-        check["unexplained"] = modulation_pairs(smear_merged(check["unexplained"], lines, swing, bin_), lines, bin_)
+        check["unexplained"] = modulation_pairs(smear_merged(listed, lines, swing, bin_), lines, bin_, order_table(box))
         differences = check["differences"]
         elsewhere = elsewhere_line(lines, box, tacho_shaft, speed, revolutions) if rec.tacho is not None else None
         misread = [elsewhere] if elsewhere else []
@@ -672,7 +672,7 @@ def _unexplained_words(line: dict, f0: float) -> str:
         said = f"{line['measured_as']} (a gear line at the measured orders"
         return f"input order {o:.4g} = {said}; {hz:.5g} Hz, {db:.0f} dB)"
     if line.get("modulation"):  # a pair about a stronger line (fixed_lines.modulation_pairs): its modulation
-        (c, d), why = line["modulation"], "mirrored: a modulation at no shaft's rate (a speed swing?)"
+        (c, d), why = line["modulation"], modulation_words(line)
         return f"order {o:.4g} ({d:.3g} orders ({d * f0:.3g} Hz) off {c:.4g}, {why}; {db:.0f} dB)"
     if "measured_as" in line:  # ... or none of theirs either: what it is, the description as written cannot tell
         why = "no described shaft's harmonic: not explained by the description as written, which differs"

@@ -111,12 +111,15 @@ def smear_merged(listed: list[dict], lines, swing: float, bin_: float) -> list[d
     return [u for u in listed if not skirt(u)]
 
 
-def modulation_pairs(listed: list[dict], lines, bin_: float) -> list[dict]:
+def modulation_pairs(listed: list[dict], lines, bin_: float, table=None) -> list[dict]:
     """*listed* (unexplained lines, each with 'order' and 'amplitude'), each of a pair mirrored about a stronger
-    line of *lines* (within SMEAR_BINS bins) marked 'modulation' [that line's order, the offset]: a modulation of
-    that line at a rate no shaft turns at, not a fixed frequency. a user's 19/103 box at 3 Hz without a tacho, its speed
-    swinging 0.2 % at 0.37 Hz faster than the mesh's phase is followed, left pairs 0.123 orders about each mesh
-    harmonic (52 dB), said 'not a gear order (a fixed frequency such as mains, or a bearing's)'."""
+    line of *lines* (within SMEAR_BINS bins) marked 'modulation' [that line's order, the offset], and where the offset
+    is a whole harmonic of a shaft of *table* (gearbox.orders.OrderTable), 'modulation_shaft' [shaft, harmonic]: a
+    localised change once a turn of that shaft spreads its mesh's sidebands past those the description lists (a
+    33/89 press's cracked pinion: pairs 4, 5 and 6 input orders about its mesh). Without a shaft, a modulation at a
+    rate no shaft turns at, not a fixed frequency: a user's 19/103 box at 3 Hz without a tacho, its speed swinging
+    0.2 % at 0.37 Hz faster than the mesh's phase is followed, left pairs 0.123 orders about each mesh harmonic
+    (52 dB), said 'not a gear order (a fixed frequency such as mains, or a bearing's)'."""
     at, amp = np.asarray(lines.at, float), np.asarray(lines.amp, float)
     near = SMEAR_BINS * bin_
     for u in listed:
@@ -125,5 +128,30 @@ def modulation_pairs(listed: list[dict], lines, bin_: float) -> list[dict]:
             carrier = np.flatnonzero((np.abs(at - c) <= near / 2) & (amp > max(u["amplitude"], v["amplitude"])))
             if u["order"] < v["order"] and carrier.size:
                 for w in (u, v):
-                    w["modulation"] = [float(at[carrier[0]]), abs(w["order"] - float(at[carrier[0]]))]
+                    d = abs(w["order"] - float(at[carrier[0]]))
+                    w["modulation"] = [float(at[carrier[0]]), d]
+                    shaft = None if table is None else _offset_shaft(table, d, tol_mesh(d, bin_) / 2)
+                    if shaft:
+                        w["modulation_shaft"] = shaft
     return listed
+
+
+def _offset_shaft(table, d: float, tol: float) -> list | None:
+    """[shaft, harmonic] of the shaft whose whole harmonic the offset *d* (input orders) lies nearest, within *tol*
+    (a bin and the offset's own drift: two lines read alike), or None: the nearest, not the first, since a slow
+    shaft's 7th (2.05) lies near the input's 2nd."""
+    misses = [
+        (abs(d - round(d / o) * o), name, round(d / o)) for name, o in zip(table.shafts, map(float, table.shaft_orders))
+    ]
+    misses = [m for m in misses if m[2] >= 1]
+    miss, name, h = min(misses) if misses else (np.inf, "", 0)
+    return [name, h] if miss <= tol else None
+
+
+def modulation_words(line: dict) -> str:
+    """Why a pair mirrored about a stronger line is listed (modulation_pairs), in the terminal's words."""
+    if line.get("modulation_shaft"):
+        shaft, h = line["modulation_shaft"]
+        nth = {1: "1st", 2: "2nd", 3: "3rd"}.get(h, f"{h}th")
+        return f"mirrored: sidebands at the {shaft} shaft's {nth} harmonic (a change once a turn of it?)"
+    return "mirrored: a modulation at no shaft's rate (a speed swing?)"
