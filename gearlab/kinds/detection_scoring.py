@@ -82,6 +82,7 @@ from .detection_which_gear import (
     stale_calls,
     unwatched,
 )
+from .scoring_gain import full_scale_elsewhere
 
 # What the learned methods see (detection_records.synchronous_input), kept in a run's scoring.json:
 # its models and thresholds hold for that input only. 1: a later mesh of no whole input order zeroed
@@ -563,7 +564,7 @@ def score(
                 rec.units,
                 differs,
                 scored_on,
-                rec.warnings,
+                rec.warnings + full_scale_elsewhere(meta, given, file_format(str(file))),
                 digest,
             )
             cut.setdefault(name, []).append((TargetFile(str(file), str(file), "test", "", name), revs))
