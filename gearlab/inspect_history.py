@@ -67,7 +67,8 @@ def localisation(path: str, history: list, box: Gearbox, options: InspectOptions
         try:
             past.append(input_revolutions(p, box, o))
         except GearlabInputError as exc:
-            if o is not options:  # read with its own keys
+            # read with its own keys, its channel too (a --history-key gain alone keeps the record's channel names)
+            if o is not options and (o.vibration, o.tacho) != (options.vibration, options.tacho):
                 raise
             name = p.replace("\\", "/").rsplit("/", 1)[-1]
             raise GearlabInputError(

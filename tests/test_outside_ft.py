@@ -116,3 +116,22 @@ def test_a_run_s_wav_full_scale_put_on_a_text_take_by_score_is_said(cli, tmp_pat
     assert code == 0, err
     said = " ".join((stdout + err).split())
     assert "gain '10 V'" in said and "full scale" in said and "--key gain=" in said, said
+
+
+def test_a_history_wav_read_with_the_take_s_column_name_says_how_to_give_its_own(cli, tmp_path):
+    # the press's takes exported by a logger as CSV (acc_V) beside last month's WAV history, whose gain was given
+    # with --history-key gain="10 V": 'rec/a_hist1.wav: no vibration channel 'acc_V' (a vibration channel: 0?); the
+    # file has: 0', with no word that the name was the take's, nor of --history-key FILE:vibration=NAME
+    (tmp_path / "press33.toml").write_text(PRESS)
+    fs = 6400
+    t = np.arange(3 * fs) / fs
+    hist = _wav(tmp_path / "h1.wav", _box(t, 24.3, [(33, 89)], np.random.default_rng(2)), fs)
+    g = _box(t, 24.3, [(33, 89)], np.random.default_rng(3))
+    np.savetxt(tmp_path / "take.csv", np.column_stack([t, 0.1 * g]), delimiter=",", header="time_s,acc_V", comments="")
+    code, out, err = cli(
+        "inspect", tmp_path / "take.csv", "--gearbox", tmp_path / "press33.toml", "--vibration", "acc_V",
+        "--sensitivity", "100 mV/g", "--history", hist, "--history-key", "gain=10 V",
+    )  # fmt: skip
+    assert code == 2, out
+    said = " ".join(err.split())
+    assert "no vibration channel 'acc_V'" in said and "--history-key 'h1.wav:vibration=NAME'" in said, said
