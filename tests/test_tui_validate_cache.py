@@ -72,6 +72,7 @@ def test_moving_through_the_tree_validates_each_scenario_and_run_once(tmp_path, 
         tail = next(n for n in tree.root.children if n.data.path.name == "tail.toml")
         assert tail.data.scenario.description == "edited"
         app._validate(tail.data)  # the palette's Validate reads the file afresh
+        await app.workers.wait_for_complete()  # in a worker thread
         await pilot.pause()
         assert validations[4:] == ["tail.toml"]
 

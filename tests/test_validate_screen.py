@@ -5,14 +5,17 @@ tachos show too short for its units, or a test take whose tacho shows a run-up t
 
 from __future__ import annotations
 
+import threading
+
 from gearboxes import description, stage
 from test_csv_footer import _rows, _write
 from test_outside_fh import BOX as MILL
 from test_outside_fh import _sweep, _sweep_scenario
 from test_score_keys import BOX, DETECT, record
-from test_tui import drive
+from test_tui import STIFFNESS, drive, text_of
+from textual.widgets import TabbedContent
 
-from gearlab.tui import GearlabApp
+from gearlab.tui import GearlabApp, validating
 
 HISTORY = '{ file = "h.csv", role = "history", label = "healthy" }'
 TEST = '{ file = "t.csv", role = "test", label = "healthy" }'
@@ -28,6 +31,7 @@ def _palette_validate(folder) -> list[tuple[str, str]]:
         app.notify = lambda message, **kw: notices.append((message, kw.get("title"))) or notify(message, **kw)
         (entry,) = [e for e in app.entries if e.path.name == "s.toml"]
         app._validate(entry)
+        await app.workers.wait_for_complete()  # validate runs in a worker thread
         await pilot.pause()
 
     drive(GearlabApp(folder), script)
@@ -82,3 +86,44 @@ def test_validate_refuses_a_test_take_the_run_refuses_for_its_units_at_the_histo
     _sweep(tmp_path / "test.csv", 7, sweep=0.0)  # the same take steady: validate says OK
     code, out, err = cli("validate", tmp_path / "run.toml")
     assert code == 0 and out.startswith("OK: "), err
+
+
+def test_the_screen_answers_keys_while_a_validation_runs_and_a_second_one_is_refused(tmp_path, monkeypatch):
+    # validate_scenario ran on the app's own thread: a detection history's tachos read (14 s of phm09_chip.toml) froze
+    # the screen, no key read until it ended. Here a validate held until the test lets it go
+    gate, calls = threading.Event(), []
+
+    def held(path):
+        calls.append(path.name)
+        assert gate.wait(60), "never let go"  # a hung test's bound
+        return f"OK: {path.name}"
+
+    monkeypatch.setattr(validating, "validate_scenario", held)
+    monkeypatch.chdir(tmp_path)
+    folder = tmp_path / "scenarios"
+    folder.mkdir()
+    (folder / "s.toml").write_text(STIFFNESS.replace("{runs}", "runs"))
+    notices = []
+
+    async def script(pilot):
+        app = pilot.app
+        notify = app.notify
+        app.notify = lambda message, **kw: notices.append((message, kw.get("title"))) or notify(message, **kw)
+        (entry,) = app.entries
+        app._validate(entry)
+        await pilot.pause()
+        assert text_of(app, "ValidatingLine") == "validating s.toml ... (the keys work meanwhile)"
+        await pilot.press("2")  # a key pressed meanwhile is handled
+        assert app.query_one("#views", TabbedContent).active == "run" and calls == ["s.toml"] and not notices
+        app._validate(entry)  # a second Validate while the first runs: refused, said so
+        assert notices == [("validating s.toml already: wait for its result, then validate again", None)]
+        assert calls == ["s.toml"]
+        gate.set()
+        await app.workers.wait_for_complete()
+        await pilot.pause()
+        assert notices[1:] == [("OK: s.toml", "valid")] and not app.query_one("ValidatingLine").display
+        app._validate(entry)  # ended: validated again when asked
+        await app.workers.wait_for_complete()
+        assert calls == ["s.toml", "s.toml"] and notices[2:] == [("OK: s.toml", "valid")]
+
+    drive(GearlabApp(folder), script)

@@ -31,7 +31,7 @@ from textual.widgets import Footer, RichLog, Static, TabbedContent, TabPane, Tre
 from ..errors import GearlabInputError
 from ..events import Event
 from ..kinds import OVERRIDES_COMMAND, SCENARIO_KINDS
-from ..notebook import load_scenario, validate_scenario
+from ..notebook import load_scenario
 from ..runs import RunDir
 from ..scenario import Scenario
 from ..verdict import verdict_lines, verdict_table
@@ -39,13 +39,14 @@ from .catalog import RunEntry, ScenarioEntry, Validated, error_line, run_entry, 
 from .plugins import PluginsPane
 from .progress import Stages
 from .screens import KeysScreen, RunOptions, RunOptionsScreen, ScoreScreen
+from .validating import Validating, ValidatingLine
 from .widgets import BrowserTree, ChartView, ResultTable, SummaryView, TomlSyntax
 
 # Below this many columns the sidebar folds away while a run or results are on show.
 NARROW = 100
 
 
-class GearlabApp(App):
+class GearlabApp(Validating, App):
     TITLE = "gearlab"
     CSS = """
     #browser { width: 34; min-width: 20; max-width: 45%; border-right: solid $primary-darken-2; }
@@ -165,6 +166,7 @@ class GearlabApp(App):
                         yield SummaryView("", id="results-lines")
                 with TabPane("Plugins", id="plugins"):
                     yield PluginsPane()
+        yield ValidatingLine()
         yield Footer()
 
     def on_mount(self) -> None:
@@ -737,23 +739,6 @@ class GearlabApp(App):
                 node.expand()
                 self.tree.cursor_line = self._line_of(next(c for c in node.children if c.data.path == path))
                 return
-
-    def _validate(self, entry: ScenarioEntry) -> None:
-        """`gearlab validate` of the entry's file (validate_scenario): its OK line, its error, its warnings."""
-        import warnings
-
-        self.validated.forget(entry.path)  # asked for: read afresh, whatever the files' times say
-        with warnings.catch_warnings(record=True) as caught:  # a logger's footer the run's reader leaves out
-            warnings.simplefilter("always")
-            try:
-                said = validate_scenario(entry.path)
-            except GearlabInputError as exc:
-                self.notify(str(exc), severity="error", title="invalid")
-            else:
-                self.notify(said, title="valid")
-        for w in caught:
-            self.notify(str(w.message), severity="warning", title="warning")
-        self.rescan()
 
     def action_show(self, tab: str) -> None:
         self.switch_to(tab)

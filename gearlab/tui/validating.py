@@ -1,0 +1,74 @@
+"""The command palette's `Validate FILE`: `gearlab validate` of the file (gearlab.validate_scenario) in a worker
+thread. For a detection scenario it reads the takes' tachos (14 s of a long history such as phm09_chip.toml's), and
+on the app's own thread that froze the screen: no key was read until it ended. A line under the views says
+"validating FILE ..." meanwhile; its end is notified as before (the OK line, the one-line error, a footer's
+warnings). One validation at a time: a second Validate while one runs is refused, said so.
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+from textual import work
+from textual.widgets import Static
+from textual.worker import get_current_worker
+
+from ..errors import GearlabInputError
+from ..notebook import validate_scenario
+from .catalog import ScenarioEntry
+
+
+class ValidatingLine(Static):
+    """The line that says which file is being validated; hidden when none is."""
+
+    DEFAULT_CSS = "ValidatingLine { height: auto; padding: 0 1; background: $boost; display: none; }"
+
+
+class Validating:
+    """GearlabApp's Validate (a mixin: the app holds `validated`, `directory`, `rescan`, `notify`)."""
+
+    validating: Path | None = None  # the file being validated, None when none is
+
+    def _validate(self, entry: ScenarioEntry) -> None:
+        """Validate the entry's file in a worker thread; refused while another validation runs."""
+        if self.validating is not None:
+            self.notify(
+                f"validating {self._listed_as(self.validating)} already: wait for its result, then validate again",
+                severity="warning",
+            )
+            return
+        self.validated.forget(entry.path)  # asked for: read afresh, whatever the files' times say
+        self.validating = entry.path
+        line = self.query_one(ValidatingLine)
+        line.update(f"validating {self._listed_as(entry.path)} ... (the keys work meanwhile)")
+        line.display = True
+        self._validate_in_thread(entry.path)
+
+    @work(thread=True, group="validate")
+    def _validate_in_thread(self, path: Path) -> None:
+        # catch_warnings is process-wide: a warning the app's own thread raised meanwhile would be shown
+        # with these; the app raises none of its own while it waits for keys
+        with warnings.catch_warnings(record=True) as caught:  # a logger's footer the run's reader leaves out
+            warnings.simplefilter("always")
+            try:
+                said, error = validate_scenario(path), None
+            except GearlabInputError as exc:
+                said, error = None, str(exc)
+        if not get_current_worker().is_cancelled:  # the app is closing: nothing left to tell
+            self.call_from_thread(self._validated, said, error, [str(w.message) for w in caught])
+
+    def _validated(self, said: str | None, error: str | None, warned: list[str]) -> None:
+        """Back on the app's thread: the result notified, the line hidden, the folder read again."""
+        self.validating = None
+        self.query_one(ValidatingLine).display = False
+        if error is not None:
+            self.notify(error, severity="error", title="invalid")
+        else:
+            self.notify(said, title="valid")
+        for message in warned:
+            self.notify(message, severity="warning", title="warning")
+        self.rescan()
+
+    def _listed_as(self, path: Path) -> str:
+        return str(path.relative_to(self.directory)) if path.is_relative_to(self.directory) else str(path)
