@@ -411,6 +411,8 @@ def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
     called) and the decision ("other damage: <gear>" when the change lies on a gear not watched)."""
     from .kinds.detection_which_gear import is_undetermined, unwatched  # the kinds import this module: at call time
 
+    unread = "not localised: too short"  # a take the which-gear check could not read (data.which_gear)
+
     quiet = unwatched(rows)  # localised on a gear no method watches, no method's decision calling it
     shown: list = [Text(f"scored with {run_dir}", style="bold")]
     for file in dict.fromkeys(r["file"] for r in rows):
@@ -448,6 +450,8 @@ def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:
             evidence = r0.get("evidence") or ""
             if evidence.startswith("not read: "):  # not localised at all (a take far off its history's speed)
                 where, evidence = evidence, ""
+            elif where == "nothing" and evidence.startswith(unread):  # too short, and no method called it
+                where, evidence = evidence.replace(unread, "not read: too short", 1), ""
             shown.append(Text(f"which gear: {where}" + (f" ({evidence})" if evidence else "")))
             if r0.get("table_call"):  # the run's own take, its table decided by an older rule (detection_scoring)
                 shown.append(Text(r0["table_call"], style="yellow"))

@@ -71,8 +71,7 @@ from .detection_trend import first_called
 from .detection_units import Rule
 from .detection_verdict import one_take
 from .detection_which_gear import (
-    NOT_CALLED,
-    NOT_LOCALISED,
+    decided_call,
     decision_of,
     is_other,
     is_undetermined,
@@ -658,9 +657,9 @@ def score(
                 r["level"] = "; ".join(w for w in (said, r["level"]) if w)
             flagged = any(r["decision"] not in ("healthy", "not scored") for r in mine)
             flaws, scored_on = clipped_call(flagged, mine[0]["flaws"]), reversed_call(flagged, mine[0]["scored_on"])
-            # a flag's name beside every 'healthy' ('watched-gear fault (not localised)'): the take's call says nothing
-            # was called; other damage localised on an unwatched gear stays said (unwatched)
-            call = mine[0]["call"] if flagged or mine[0]["call"] != NOT_LOCALISED else NOT_CALLED
+            # no flag's name beside every 'healthy': the take's call says nothing was called; other damage localised
+            # on an unwatched gear stays said (unwatched)
+            call = decided_call(mine[0]["call"], flagged)
             for r in mine:
                 r["flaws"], r["scored_on"], r["call"] = flaws, scored_on, call
     # in the order the files were given (week 1, 2, 3, ...), not grouped by condition: the printout and the trend

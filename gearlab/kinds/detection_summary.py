@@ -16,7 +16,7 @@ from ..signals.nonsync import HUM
 from .detection_level import REVERSED_CALL, most_called
 from .detection_records import longest_tsa
 from .detection_verdict import OTHER_NONSYNC, detection_lines, watched_calls
-from .detection_which_gear import OTHER, UNDETERMINED, WATCHED
+from .detection_which_gear import OTHER, UNDETERMINED, WATCHED, judged_unit
 from .record_effects import logged
 
 # A median unit this many of its history's unit spreads or more off its threshold is said as '> +100 sd' with the
@@ -125,8 +125,7 @@ def take_lines(summary: Mapping, records: list[Mapping], unit: str) -> list[str]
     for path, take in takes.items():
         condition, call, ns = take.get("condition"), take.get("call") or "", take.get("nonsync") or {}
         # a take too short for the run's longest TSA is judged at the longest it fills, as the verdict's condition is
-        filled = [u for r in records for u, v in ((r.get("test_scores") or {}).get(path) or {}).items() if len(v)]
-        at = unit if unit in filled else longest_tsa(filled) or unit
+        at = judged_unit(records, path, unit)
         called, scored = _methods(records, condition, path, at)
         level = _level(summary, condition, path)
         sure = f"called by {len(called)} of {scored} methods at {at}"
@@ -143,7 +142,10 @@ def take_lines(summary: Mapping, records: list[Mapping], unit: str) -> list[str]
             tone = f"bearing-like tone at {ns['order']:.2f} input orders{_orders(ns['order'], shafts)}"
             tone += f", z {ns['z']:.1f} over {ns['threshold']:.1f}"
             said.append(tone + ("" if take.get("named") else f": a bearing, not a gear; {sure}"))
-        if call.startswith((HUM, UNDETERMINED)):
+        # a take too short for the which-gear check is a fault of no gear where a method calls it; uncalled, a take
+        # where nothing was found, in a summary made before its calls were decided too (detection_which_gear.
+        # decided_call: a healthy 2 s take under every threshold opened the verdict with an alarm's words)
+        if call.startswith(HUM) or (call.startswith(UNDETERMINED) and called):
             said.append(f"{call}; {sure}")
         if not said and called:
             largest = take["summary"].removeprefix("nothing localised ")  # '(largest: input z = 1.35, threshold 2.58)'

@@ -147,6 +147,37 @@ def is_also_other(call: str | None) -> bool:
     return bool(call) and call.startswith(WATCHED) and ALSO in call
 
 
+def decided_call(call: str | None, called: bool) -> str | None:
+    """A take's call as decided: NOT_CALLED where no method's decision calls it (*called*) and *call* names no gear (a
+    flag's name alone: 'watched-gear fault (not localised)', or 'fault, gear not determined' of a take too short for
+    the which-gear check); else *call* (a gear or a bearing-like line named stays said). A run's summary and `gearlab
+    score`'s rows say it alike."""
+    return NOT_CALLED if not called and (call == NOT_LOCALISED or is_undetermined(call)) else call
+
+
+def judged_unit(records: list[dict], path: str, unit: str) -> str:
+    """The unit a take is judged at: *unit* (the run's longest TSA), or the longest a take too short for it fills."""
+    filled = [u for r in records for u, v in ((r.get("test_scores") or {}).get(path) or {}).items() if len(v)]
+    return unit if unit in filled else longest_tsa(filled) or unit
+
+
+def called_takes(records: list[dict]) -> set[str]:
+    """The test takes some method's decision calls (detection_level.most_called at judged_unit), as the verdict
+    (detection_summary.take_lines) and `gearlab score` decide; an ensemble's members (seed or fold) are no method."""
+    from .detection_level import most_called
+
+    judged = [r for r in records if r.get("seed") is None and r.get("fold") is None]
+    unit = longest_tsa(u for r in judged for u in r["thresholds"])
+    out = set()
+    for path in {p for r in judged for p in r["test_scores"]}:
+        at = judged_unit(judged, path, unit)
+        for r in judged:
+            units, threshold = r["test_scores"].get(path) or {}, r["thresholds"].get(at)
+            if units.get(at) and threshold is not None and most_called(units[at], threshold):
+                out.add(path)
+    return out
+
+
 def decision_of(called: bool, call: str | None) -> str:
     """A record's decision (`gearlab score`) from its units' majority called and its call (call_of),
     by the rule the detection run's tables count its flags with (calls_by_label): not called,
@@ -565,13 +596,15 @@ def which_gear_summary(loc: dict | None, records: list[dict], labels: dict, posi
     label), and their tables."""
     if not loc:
         return {}
-    calls = calls_by_label(loc, records, labels, positive)
+    calls, called = calls_by_label(loc, records, labels, positive), called_takes(records)
     return {
         "gearbox": loc["gearbox"],
         "watched": loc["watched"],
         "shaft_orders": loc.get("shaft_orders"),
+        # each take's call as decided: no flag's name on a take no method calls (decided_call), as `gearlab score` says
         "records": {
-            p: {k: r.get(k) for k in ("condition", "named", "summary", "nonsync", "call")}
+            p: {k: r.get(k) for k in ("condition", "named", "summary", "nonsync")}
+            | {"call": decided_call(r.get("call"), p in called)}
             for p, r in loc["records"].items()
         },
         "calls": calls,
