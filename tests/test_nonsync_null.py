@@ -110,8 +110,10 @@ def test_a_run_saved_with_one_take_s_gaussian_floor_is_scored_with_today_s_thres
     saved = NS.NonSyncHistory(today.blocks, 4.09).state()
     back = NS.NonSyncHistory.restored(saved, table)
     assert back.threshold == today.threshold > 5.5, (back.threshold, today.threshold)
-    two = NS.NonSyncHistory((today.blocks[0], today.blocks[0]), 5.5)  # of two takes: as saved
-    assert NS.NonSyncHistory.restored(two.state(), table).threshold == 5.5
+    # of two takes: today's too, from their blocks (an older gearlab saved a threshold its z's units set)
+    two = NS.NonSyncHistory((today.blocks[0], today.blocks[0][::-1]), 3.9)
+    back = NS.NonSyncHistory.restored(two.state(), table)
+    assert back.threshold == NS.threshold_of(two.blocks, table) != 3.9 and not back.threshold_from, back
 
 
 def test_a_history_of_few_takes_holds_the_share_asked_on_takes_longer_than_its_own(monkeypatch):

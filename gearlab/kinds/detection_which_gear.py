@@ -206,7 +206,8 @@ def nonsync_words(ns: dict | None) -> str:
     if "note" in ns:  # why it was not read (signals.nonsync.too_short)
         return ns["note"]
     over = f" ({NS.PASSED})" if ns["z"] > ns["threshold"] else ""
-    return f"non-synchronous z {ns['z']:.1f}/{ns['threshold']:.1f}{over} at order {ns['order']:.2f}"
+    older = f" ({ns['threshold_from']})" if ns.get("threshold_from") else ""  # not today's rule (NonSyncHistory)
+    return f"non-synchronous z {ns['z']:.1f}/{ns['threshold']:.1f}{over}{older} at order {ns['order']:.2f}"
 
 
 def nonsync_history(takes: list[W.Take], table) -> NS.NonSyncHistory | None:

@@ -247,9 +247,20 @@ def envelope_blocks(r: np.ndarray, points: int) -> np.ndarray:
     return np.asarray(out)[:, lo : hi + 1]
 
 
+# the bins envelope_blocks keeps, LOW .. HIGH input orders (of revolutions of 2 HIGH points or more)
+BINS = int(HIGH * BLOCK) - int(math.ceil(LOW * BLOCK)) + 1
+
+
 def orders_of_bins(bins: int) -> np.ndarray:
     """The input order of each bin envelope_blocks keeps."""
     return (int(math.ceil(LOW * BLOCK)) + np.arange(bins)) / BLOCK
+
+
+# what a score says of a history whose saved arrays do not give today's threshold (NonSyncHistory.restored)
+OLDER = (
+    "threshold as saved by an older gearlab (its saved history does not give today's): running the detection again "
+    "refreshes it"
+)
 
 
 @dataclass(frozen=True)
@@ -259,6 +270,7 @@ class NonSyncHistory:
     blocks: tuple[np.ndarray, ...]
     threshold: float  # the same at every take length: z carries the noise of the take's mean and the history's (line_z)
     speeds: tuple[float, ...] = ()  # each record's mean input speed (Hz; none where not given): hum_or_bearing
+    threshold_from: str = ""  # "": today's rule (threshold_of); else why not (OLDER)
 
     def state(self) -> dict:
         """Arrays to save (parts.scoring.save_arrays) and restore (restored)."""
@@ -271,17 +283,21 @@ class NonSyncHistory:
 
     @classmethod
     def restored(cls, state: dict, table) -> NonSyncHistory | None:
-        """The history state() saved, of the gearbox of order table *table*; None for a state saved without it. One
-        take's threshold is today's (one_take_threshold): a run saved with the Gaussian floor alone called healthy
-        takes."""
+        """The history state() saved, of the gearbox of order table *table*; None for a state saved without it. Its
+        threshold is today's (threshold_of its blocks), not the one saved: an older gearlab's rule held healthy takes
+        over it (one take's Gaussian floor called 154 of 200 healthy rig takes; several takes' z, in sds of the
+        take's mean alone, were scaled from a lower floor). Where the blocks cannot give it (not told apart by take,
+        or bins of another layout than today's), the saved one is kept and said to be (OLDER)."""
         if "nonsync_blocks" not in state:
             return None
-        cuts = np.cumsum(np.asarray(state["nonsync_sizes"]))[:-1]
         speeds = tuple(float(v) for v in np.asarray(state.get("nonsync_speeds", ())))  # none: saved before them
-        blocks = tuple(np.split(np.asarray(state["nonsync_blocks"]), cuts))
-        if len(blocks) == 1:
-            return cls(blocks, one_take_threshold(blocks[0], table), speeds)
-        return cls(blocks, float(state["nonsync_threshold"]), speeds)
+        every, saved = np.asarray(state["nonsync_blocks"]), float(state["nonsync_threshold"])
+        if "nonsync_sizes" not in state:  # one pool of blocks: no take to leave out
+            return cls((every,), saved, speeds, OLDER)
+        blocks = tuple(np.split(every, np.cumsum(np.asarray(state["nonsync_sizes"]))[:-1]))
+        if every.shape[1] != BINS:
+            return cls(blocks, saved, speeds, OLDER)
+        return cls(blocks, threshold_of(blocks, table), speeds)
 
 
 @dataclass(frozen=True)
@@ -296,6 +312,7 @@ class NonSync:
     locked: str = ""
     why: str = ""
     shaft: str = ""  # the shaft a whole order of which the strike order is (on_shaft): a named gear's own leak
+    threshold_from: str = ""  # the history's (NonSyncHistory.threshold_from): "" where today's rule
 
     @property
     def changed(self) -> bool:
@@ -303,6 +320,7 @@ class NonSync:
 
     def describe(self) -> dict:
         said = {"z": self.z, "order": self.order, "threshold": self.threshold, "changed": self.changed}
+        said |= {"threshold_from": self.threshold_from} if self.threshold_from else {}
         return said | {"locked": self.locked, "why": self.why, "shaft": self.shaft}
 
 
@@ -433,10 +451,16 @@ def history(takes: list[np.ndarray], table, speeds: list[float] | None = None) -
             f"non-synchronous residual: the history holds {sum(len(b) for b in blocks)} blocks of {BLOCK} "
             "input revolutions; expected at least 3"
         )
-    sync = synchronous_bins(table, blocks[0].shape[1])
     known = () if speeds is None else tuple(float(v) for v in speeds)
+    return NonSyncHistory(blocks, threshold_of(blocks, table), known)
+
+
+def threshold_of(blocks: tuple[np.ndarray, ...], table) -> float:
+    """The threshold on z of a history of takes whose envelope blocks (take_blocks) are *blocks*, one array a take, of
+    the gearbox of order table *table*: from the blocks alone, so a saved history is restored with it."""
     if len(blocks) == 1:  # no records' spread to read: the blocks' noise alone
-        return NonSyncHistory(blocks, one_take_threshold(blocks[0], table), known)
+        return one_take_threshold(blocks[0], table)
+    sync = synchronous_bins(table, blocks[0].shape[1])
     # the record's z is a maximum over the bins searched: its threshold is the family's, Student's t quantile at
     # FALSE_ALARM shared among them (Bonferroni; the Gaussian's let 28 of 1000 synthetic healthy takes through against
     # 3 takes of 4 blocks, t's 7: tests/test_nonsync_null.py), in units of the spread of the history's own line z,
@@ -449,7 +473,7 @@ def history(takes: list[np.ndarray], table, speeds: list[float] | None = None) -
         if rest and sum(len(x) for x in rest) >= 2:
             left_out.append(line_z(b, rest, sync)[~sync])
     spread = max(float(np.std(np.concatenate(left_out))), 1.0) if left_out else 1.0
-    return NonSyncHistory(blocks, max([floor * spread, *(float(z.max()) for z in left_out)]), known)
+    return max([floor * spread, *(float(z.max()) for z in left_out)])
 
 
 def one_take_threshold(blocks: np.ndarray, table) -> float:
@@ -515,9 +539,9 @@ def read_take(
     order = refined(r, np.shape(take)[-1], order)
     shaft = on_shaft(order, table)
     if speeds is None or len(speeds) != len(take) or harmonic(order * mean_speed(speeds)) is None:
-        return NonSync(z, order, hist.threshold, shaft=shaft), lines
+        return NonSync(z, order, hist.threshold, shaft=shaft, threshold_from=hist.threshold_from), lines
     locked = hum_or_bearing(r, np.shape(take)[-1], order, speeds, hist, table)
-    return NonSync(z, order, hist.threshold, *locked, shaft=shaft), lines
+    return NonSync(z, order, hist.threshold, *locked, shaft=shaft, threshold_from=hist.threshold_from), lines
 
 
 def mean_speed(speeds: np.ndarray) -> float:
