@@ -5,8 +5,6 @@ between a description and a recording called out."""
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -204,21 +202,15 @@ def test_an_ambiguous_speed_is_refused(tmp_path):
 # --- the command -------------------------------------------------------------------------------
 
 
-def gearlab(*args):
-    return subprocess.run(
-        [sys.executable, "-m", "gearlab", *map(str, args)], capture_output=True, text=True, timeout=300
-    )
-
-
 def test_the_command_in_the_terminal_and_as_json(tmp_path, cli):
     path = record(tmp_path, ((20, 57),), revs=300)
     box = tmp_path / "box.toml"
     box.write_text(description(stage(20, 57, bores=("1 cm", "1 cm"))))
-    out = gearlab("inspect", path, "--gearbox", box, "--vibration", "acc", "--tacho", "tacho")
-    assert out.returncode == 0, out.stderr
-    assert "matches this recording" in out.stdout and "order spectrum" in out.stdout
-    # the JSON forms in this process: the command's own process start is the one above's (each
-    # start imported gearlab again: 2.3 s of CPU a call)
+    # in this process, as the JSON forms below: a child's start imported gearlab again (2.3 s of CPU a call), and
+    # `python -m gearlab` starting a command is tests/test_runinfo.py's and tests/test_run_options.py's
+    code, out, err = cli("inspect", path, "--gearbox", box, "--vibration", "acc", "--tacho", "tacho")
+    assert code == 0, err
+    assert "matches this recording" in out and "order spectrum" in out
     code, out, err = cli("inspect", path, "--gearbox", box, "--vibration", "acc", "--json")
     data = json.loads(out)
     assert code == 0 and data["matches"] and abs(data["speed"]["mean_hz"] - 25) < 0.1
