@@ -1,0 +1,48 @@
+"""Quitting the TUI while its palette Validate runs: the app ends at once, not when the validation does (a detection
+history's tachos take 14 s of phm09_chip.toml). The validation was a Textual thread worker, run in the event loop's
+default executor, which asyncio.run joins as the app's run ends: the screen closed, the process waited."""
+
+from __future__ import annotations
+
+import threading
+
+from test_tui import STIFFNESS, drive
+
+from gearlab.tui import GearlabApp, validating
+
+
+def test_quitting_while_a_validation_runs_does_not_wait_for_it(tmp_path, monkeypatch):
+    started, gate, ended = threading.Event(), threading.Event(), threading.Event()
+    failed = []  # what the validation's thread raised after the app had gone, where anything
+
+    def held(path):
+        started.set()
+        gate.wait(30)  # the test lets it go once the app's run has returned (the bound: a run that waits for it)
+        ended.set()
+        return f"OK: {path.name}"
+
+    monkeypatch.setattr(validating, "validate_scenario", held)
+    monkeypatch.setattr(threading, "excepthook", failed.append)
+    monkeypatch.chdir(tmp_path)
+    folder = tmp_path / "scenarios"
+    folder.mkdir()
+    (folder / "s.toml").write_text(STIFFNESS.replace("{runs}", "runs"))
+    notices = []
+
+    async def script(pilot):
+        app = pilot.app
+        app.notify = lambda message, **kw: notices.append(message)
+        (entry,) = app.entries
+        app._validate(entry)
+        while not started.is_set():
+            await pilot.pause(0.01)
+        await pilot.press("q")
+
+    drive(GearlabApp(folder), script)  # asyncio.run of the app: its run over, its loop closed
+    returned_before_the_validation_ended = not ended.is_set()
+    gate.set()
+    assert ended.wait(30)
+    assert returned_before_the_validation_ended
+    for thread in [t for t in threading.enumerate() if t.name.startswith("validate ")]:
+        thread.join(30)  # its result had nowhere to go: dropped, nothing raised
+    assert failed == [] and notices == [], (failed, notices)
