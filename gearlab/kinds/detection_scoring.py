@@ -28,6 +28,7 @@ from ..scenario import check_type
 from ..settings import in_bounds, setting
 from ..signals import Standardiser
 from ..signals.checks import VARIES_WORDS, read_off_mark, turned_line
+from ..signals.regrid import at_points
 from ..signals.spikes import without_spikes
 from . import record_effects
 from .common import MEASURED
@@ -263,6 +264,8 @@ def _scoring_condition(
     tacho mark may find it at} where its own tacho shaft or marks a turn are not the run's)."""
     c = meta["conditions"][name]
     arrays = scoring.load_arrays(run.file("scoring", c["file"]))
+    # a history saved at other points a revolution (an older gearlab's records): the takes read on its grid
+    records = [(f, at_points(revs, arrays["history"].shape[1])) for f, revs in records]
     standardiser = Standardiser(*(float(v) for v in arrays["standardiser"]))
     parts = np.split(arrays["history"], np.cumsum([n for _, n in c["history"]])[:-1])
     history = [(TargetFile(path, path, "history", "", name), revs) for (path, _), revs in zip(c["history"], parts)]

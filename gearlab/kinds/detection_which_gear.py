@@ -47,7 +47,6 @@ The localisation uses the records' signals only; the labels come in with the tab
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from pathlib import Path
 
@@ -65,6 +64,7 @@ from ..signals import localise as L
 from ..signals import nonsync as NS
 from ..signals import which_template as T
 from .detection_records import longest_tsa
+from .detection_saved import saved_histories
 
 WATCHED, OTHER = "watched-gear fault", "other damage"
 NOT_LOCALISED = f"{WATCHED} (not localised)"  # a flag with no evidence of where: counted as the watched gear's
@@ -363,13 +363,15 @@ def localise_scored(run, records: dict[str, list], turned: dict[str, int] | None
         state = meta["conditions"].get(name, {}).get("state")
         if state is None:
             continue
-        arrays = scoring.load_arrays(run.file("scoring", state))
-        # the envelope's history: None for a run stored before it was read (the synchronous averages alone)
-        hist = dataclasses.replace(L.History.restored(arrays, table), envelope=E.restored(arrays, table))
-        quiet = NS.NonSyncHistory.restored(arrays, table)  # None: a run stored before the residual was read
+        # the envelope's history: None for a run stored before it was read (the synchronous averages alone); the
+        # residual's, None for a run stored before it was read; one this gearlab cannot read: why, in every row
+        hist, quiet, why, unread = saved_histories(scoring.load_arrays(run.file("scoring", state)), table)
         # a run stored before the events' simulator was said: the source's description, no effects
         made = meta.get("events", W.events(meta["preset"]))
         for path, take in recs:
+            if hist is None:
+                out[path] = not_read(why)
+                continue
             ns = nonsync_of(take.revolutions, quiet, table, take.speeds)
             found = W.which_gear(take, hist, table, made, envelope=not (ns or {}).get("changed"))
             found["turned"] = (turned or {}).get(path, 0)
@@ -378,7 +380,7 @@ def localise_scored(run, records: dict[str, list], turned: dict[str, int] | None
                 "summary": found["summary"],
                 "nonsync": ns,
                 "call": call_of(found, meta["watched"], ns, take.speed_hz),
-                "evidence": evidence(found, ns),
+                "evidence": evidence(found, ns) + (f"; {unread}" if unread else ""),
             }
     return out
 

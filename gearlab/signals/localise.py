@@ -636,7 +636,7 @@ class History:
         if lay.orders.size != state["power"].size:
             raise GearlabInputError(
                 f"a saved localisation history holds {state['power'].size} orders, the gearbox's layout "
-                f"{lay.orders.size}: saved for another gearbox description"
+                f"{lay.orders.size}: saved for another gearbox description, or by a gearlab of another layout rule"
             )
         excess = state["excess"] if "excess" in state else np.zeros(0)  # saved before: the noise model alone
         periods = float(state["periods"]) if "periods" in state else 0.0  # saved before: the take's level not read

@@ -256,7 +256,8 @@ def orders_of_bins(bins: int) -> np.ndarray:
     return (int(math.ceil(LOW * BLOCK)) + np.arange(bins)) / BLOCK
 
 
-# what a score says of a history whose saved arrays do not give today's threshold (NonSyncHistory.restored)
+# what a score says of a history whose saved arrays do not give today's threshold, or are not read (NonSyncHistory)
+REFRESH = "running the detection again refreshes the history"
 OLDER = (
     "threshold as saved by an older gearlab (its saved history does not give today's): running the detection again "
     "refreshes it"
@@ -271,6 +272,7 @@ class NonSyncHistory:
     threshold: float  # the same at every take length: z carries the noise of the take's mean and the history's (line_z)
     speeds: tuple[float, ...] = ()  # each record's mean input speed (Hz; none where not given): hum_or_bearing
     threshold_from: str = ""  # "": today's rule (threshold_of); else why not (OLDER)
+    unread: str = ""  # "": a take is read against it; else why not (restored: bins of another layout than today's)
 
     def state(self) -> dict:
         """Arrays to save (parts.scoring.save_arrays) and restore (restored)."""
@@ -287,7 +289,9 @@ class NonSyncHistory:
         threshold is today's (threshold_of its blocks), not the one saved: an older gearlab's rule held healthy takes
         over it (one take's Gaussian floor called 154 of 200 healthy rig takes; several takes' z, in sds of the
         take's mean alone, were scaled from a lower floor). Where the blocks cannot give it (not told apart by take,
-        or bins of another layout than today's), the saved one is kept and said to be (OLDER)."""
+        or bins of another layout than today's), the saved one is kept and said to be (OLDER). Blocks of other bins
+        than today's (an older gearlab's BLOCK, LOW or HIGH) are not read against (unread): which order each bin
+        was is not saved, and a block of other revolutions is another estimate, not a re-binning of today's."""
         if "nonsync_blocks" not in state:
             return None
         speeds = tuple(float(v) for v in np.asarray(state.get("nonsync_speeds", ())))  # none: saved before them
@@ -296,7 +300,9 @@ class NonSyncHistory:
             return cls((every,), saved, speeds, OLDER)
         blocks = tuple(np.split(every, np.cumsum(np.asarray(state["nonsync_sizes"]))[:-1]))
         if every.shape[1] != BINS:
-            return cls(blocks, saved, speeds, OLDER)
+            said = f"{BINS} from {LOW:g} to {HIGH:g} input orders in blocks of {BLOCK} revolutions"
+            why = f"its saved history holds {every.shape[1]} bins a block, this gearlab reads {said}"
+            return cls(blocks, saved, speeds, OLDER, f"non-synchronous check not read: {why}; {REFRESH}")
         return cls(blocks, threshold_of(blocks, table), speeds)
 
 
@@ -529,7 +535,7 @@ def read_take(
     its envelope blocks and their z read once for both, where `inspect --history` shows the strongest lines too
     (a take's residual is two to four FFTs of its whole length); a strike order on a mains harmonic at the take's
     *speeds* (each revolution's, Hz) read as hum or a bearing (hum_or_bearing)."""
-    short = too_short(len(take), table)
+    short = too_short(len(take), table) or hist.unread
     if short:
         raise GearlabInputError(short)
     r = residual(take, table)
