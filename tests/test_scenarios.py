@@ -84,7 +84,7 @@ def test_the_list_is_every_shipped_scenario():
 
 
 # What validate says of a scenario besides "OK": phm09_chip's takes as its file list gives them (validate reads
-# every take's tacho, 14 s: one test of it)
+# every take's tacho, 8 s of CPU: one test of it)
 SAID = {"phm09_chip.toml": "24 measured records (8 history, 16 test)"}
 
 

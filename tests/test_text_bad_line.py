@@ -39,3 +39,29 @@ def test_a_good_take_reads_whole(tmp_path):
     path = _take(tmp_path / "take.txt", "0.5")
     columns, header, width = read_columns(path, ["acc"])
     assert header == ["time", "acc"] and width == 2 and columns["acc"].size == 3000
+
+
+def test_only_the_asked_for_columns_numbers_parsed_give_the_whole_parse_s_columns(tmp_path, monkeypatch):
+    """readers.text.asked_numbers_only: the asked-for columns as the whole parse gives them, over blocks, a comment
+    and a footer; a field that is no number in another column reads there (the whole parse refuses it), one in an
+    asked-for column is refused in the whole parse's line."""
+    from gearlab.data.readers import text
+
+    monkeypatch.setattr(text, "CHUNK_BYTES", 4096)  # many blocks
+    rows = [f"{i * 1e-3:.4e} {np.sin(i):.6f} {np.cos(i):.6f}" for i in range(3000)]
+    path = tmp_path / "r.txt"
+    path.write_text("t a b\n" + "\n".join(rows[:1500]) + "\n# a comment\n" + "\n".join(rows[1500:]) + "\nEnd\n")
+    whole_warned, warned = [], []
+    whole = read_columns(path, [2, 0], whole_warned)[0]
+    with text.asked_numbers_only():
+        asked = read_columns(path, [2, 0], warned)[0]
+    assert all(np.array_equal(asked[c], whole[c]) for c in (0, 2)) and len(whole[0]) == 3000
+    assert warned == whole_warned and "End" in warned[0]
+    rows[2000] = rows[2000].replace(rows[2000].split()[1], "n/a")
+    path.write_text("\n".join(rows) + "\n")
+    with pytest.raises(GearlabInputError, match="line 2001 column 1: 'n/a' is not a number"):
+        read_columns(path, [2])
+    with text.asked_numbers_only():
+        assert np.array_equal(read_columns(path, [2])[0][2], whole[2])
+        with pytest.raises(GearlabInputError, match="line 2001 column 1: 'n/a' is not a number"):
+            read_columns(path, [1])

@@ -127,3 +127,24 @@ def test_the_screen_answers_keys_while_a_validation_runs_and_a_second_one_is_ref
         assert calls == ["s.toml", "s.toml"] and notices[2:] == [("OK: s.toml", "valid")]
 
     drive(GearlabApp(folder), script)
+
+
+def test_the_screen_parses_a_text_take_s_tacho_alone_and_refuses_what_the_whole_parse_refuses(tmp_path, cli):
+    """The screen parses a text take's tacho column alone (readers.text.asked_numbers_only); a field that is no
+    number in another column, which fails the whole parse the run reads with, is seen where the screen would refuse:
+    the refusal is then the whole parse's (a history take that does not read is left to the run: OK here, as the
+    screen said when it parsed every field)."""
+    (tmp_path / "box.toml").write_text(BOX)
+    for name, seconds in (("h", 0.2), ("t", 0.5)):  # a history of 4 revolution units, 8 needed
+        rows = record(tmp_path / f"{name}.csv", seconds=seconds).read_text().splitlines()
+        (tmp_path / f"{name}.txt").write_text("\n".join(r.replace(",", " ") for r in rows) + "\n")
+    files = HISTORY.replace("h.csv", "h.txt") + ", " + TEST.replace("t.csv", "t.txt")
+    (tmp_path / "s.toml").write_text(DETECT.format(files=files))
+    code, out, err = cli("validate", tmp_path / "s.toml")
+    assert code == 2 and "expected at least 8" in err, (out, err)
+    rows = (tmp_path / "h.txt").read_text().splitlines()
+    time_s, acc, tacho = rows[100].split()
+    rows[100] = f"{time_s} n/a {tacho}"  # the vibration's field, not the tacho's
+    (tmp_path / "h.txt").write_text("\n".join(rows) + "\n")
+    code, out, err = cli("validate", tmp_path / "s.toml")
+    assert code == 0 and out.startswith("OK: "), (out, err)

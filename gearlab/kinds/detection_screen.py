@@ -11,15 +11,15 @@ counted into units of every kind (an upper bound: a start-up the run drops, tran
 vibration). Where a condition's bound falls short, the takes are read as the run reads them (detection_records.
 read_target), which refuses in the run's words; a tacho-less history (its speed in its vibration's mesh lines) is
 left to the run. A 60 s, 20 kHz CSV take's tacho column reads in 0.5 s, the take itself in 0.9 s; a 3 s take's in
-0.07 s and 0.18 s; phm09_chip's 8 zipped text history takes 4-5 s in all (its text parsed whole for one column), so
-a run, which reads them whole at once, the TUI's tree and a comparison leave it out.
+0.07 s and 0.18 s; phm09_chip's 8 zipped text history takes a few seconds in all (a text's tacho column parsed alone:
+history_short), so a run, which reads them whole at once, the TUI's tree and a comparison leave it out.
 
 A test take's tacho is read alike where the history's read: a run-up or coast-down is cut at its condition's history
 speed as the run cuts it (detection_in_band.cut_run_ups), and one whose stretch there holds no unit is refused in the
 run's line (a 3 s take of the 39/61 drive sweeping 60 % about its 30 Hz history holds 7 of its 89 turns in the band,
 30 needed: validate said OK, the run stopped). A steady test take too short for a unit kind is no refusal: the run
-scores it 'not scored' for that kind. phm09_chip's validate, its 8 history and 16 test takes zipped text: 14 s (6 s
-with the history's alone), on a 2-core machine."""
+scores it 'not scored' for that kind. phm09_chip's validate, its 8 history and 16 test takes zipped text: 8 s of CPU
+(11 s with every field of the texts parsed), on a 2-core machine."""
 
 from __future__ import annotations
 
@@ -28,6 +28,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ..data.readers.text import asked_numbers_only
 from ..data.recordings import CutRecording, Recording, channel_key, read_contents, sampling_rate, series, shaft_angle
 from ..errors import GearlabInputError
 from ..parts.measured import Target
@@ -63,7 +64,18 @@ def history_short(target: Target, blocks, shaft: UnitShaft | None, where: str) -
     """Whether the takes' tachos alone show a condition's history too short for a unit kind (fewer than
     MIN_HISTORY_UNITS units, or a take whose steady part holds none: detection_in_band.steady_histories), at the most
     units its takes can give, or a test take's run-up too short at its history's speed (run_up_short); False where a
-    history take has no tacho or its tacho does not read (the run says why)."""
+    history take has no tacho or its tacho does not read (the run says why). A text take's tacho column is parsed
+    alone (readers.text.asked_numbers_only); where that shows a take short, the takes are read again with each row
+    parsed whole, which a text with a field no number in another column fails, as the run's read does (the history's
+    then left to the run, such a test take skipped): what is refused is what the whole parse refuses."""
+    with asked_numbers_only():
+        if not _short(target, blocks, shaft, where):
+            return False  # the whole parse reads the same tacho, or fails: it would not refuse either
+    return _short(target, blocks, shaft, where)
+
+
+def _short(target: Target, blocks, shaft: UnitShaft | None, where: str) -> bool:
+    """history_short with the takes' tachos read as the reader reads them."""
     history = [f for f in target.files if f.role == "history"]
     try:
         records = {f.path: _from_tacho(target, f) for f in history}

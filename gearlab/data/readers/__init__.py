@@ -20,7 +20,7 @@ from .csv import _read_csv
 from .hdf5 import _read_hdf5
 from .matlab import _read_mat
 from .npz import _read_npz
-from .text import _read_text
+from .text import _read_text, asked_only
 from .wav import _read_wav
 
 READERS = {
@@ -47,7 +47,7 @@ def parsed(fmt: str, path: Path, names: Sequence[str]) -> Contents:
     a copy of the contents each call, its arrays read-only (shared by every caller)."""
     stat = path.stat()
     key = (fmt, str(path.resolve()), stat.st_dev, stat.st_ino, stat.st_size, stat.st_mtime_ns, stat.st_ctime_ns)
-    key += tuple(names)
+    key += (*names, asked_only())  # contents read with only the asked-for numbers parsed are kept apart
     contents = _kept.get(key)
     if contents is None:
         contents = READERS[fmt](path, names)
