@@ -20,6 +20,7 @@ import numpy as np
 from ..errors import GearlabInputError
 from ..signals import POINTS
 from ..signals import envelope_sync as E
+from ..signals import envelope_train as TR
 from ..signals import localise as L
 from ..signals import nonsync as NS
 from .chain import Chain
@@ -128,7 +129,11 @@ def which_gear(take: Take, hist: L.History, table, made: dict | None, envelope: 
         except GearlabInputError:
             return found.describe()
         if seen.named is not None and not E.elsewhere(found, seen.named_shaft):
-            return E.described(seen, found.summary())
+            why = TR.of_the_train(take.revolutions, seen, hist.envelope, table, first)
+            if why is None:
+                return E.described(seen, found.summary())
+            out = found.describe()  # the train's products, not a strike: nothing named (signals.envelope_train)
+            return out | {"summary": f"{out['summary']}; {why}"}
     return found.describe()
 
 
