@@ -5,7 +5,8 @@ them here as takes: the history read once (history_of: its band of orders, each 
 revolution counted from the input angle's zero, turned to the first take's tacho mark), and each
 record localised against it (which_gear: signals.localise, a two-gear shaft's gear by the
 description's simulated events at the record's speed and rate, data.which_templates); where no shaft's average
-names a change, the record's envelope is (signals.envelope_sync: a strike whose ring's phase wanders). What a
+names a change, the record's envelope is (signals.envelope_sync: a strike whose ring's phase wanders; not where
+the flag is the train's products, signals.envelope_train). What a
 flag then means to a scenario that watches a gear is the detection kind's (its call); which gear
 carries the change is decided here only.
 """
