@@ -68,13 +68,12 @@ adapter = "source_only"
 adapter = "mmd"
 """,
         repetitions=2,  # the every-kind run's two repetitions: finished_runs's verdict needs a method ahead
-        max_epochs=40,
     )
     + '[output]\ndir = "{runs}"\n'
 )
 # cancel/resume's: 4 units (k 0 and 2, two methods), of which the cancel keeps the first two (the others held,
 # held_units) and the resume makes the other two. The held units, not the training's length, decide where the
-# cancel lands: TRANSFER's 8 units of up to 40 epochs made the test 13.1 s of CPU, these 11.4 s (same assertions).
+# cancel lands: TRANSFER's 8 units made the test 13.1 s of CPU, these 11.4 s (same assertions).
 # Its target without the tiny scenarios' sensor noise: a noise-free target has no Bayes bound, which each of the
 # two runs (the cancelled one and the resume) computed before its units, loading torch for it (about 0.6 s of a
 # child's CPU each); nothing here reads the bound, and the every-kind runs keep it
@@ -252,7 +251,11 @@ def test_quick_run_key_runs_the_shrunk_scenario(folder, quick_stream, monkeypatc
 
 
 @pytest.fixture
-def transfer_folder(folder, tmp_path):
+def transfer_folder(folder, tmp_path, monkeypatch, kinds_cache, kind_streams):
+    """CANCELLED beside the `folder` fixture's scenarios, its datasets in the module's cache of the every-kind
+    runs (kind_streams): TRANSFER's run left there the source dataset CANCELLED also uses (their targets differ
+    by the noise alone), which the cancelled run's child otherwise simulated again (1.8 s of its CPU)."""
+    monkeypatch.setenv("GEARLAB_CACHE", str(kinds_cache))
     (folder / "tiny.toml").write_text(CANCELLED.replace("{runs}", str(tmp_path / "runs")))
     return folder
 
