@@ -6,9 +6,10 @@ from __future__ import annotations
 
 import threading
 
-from test_tui import STIFFNESS, drive
+from test_tui import drive
+from test_validate_screen import one_scenario_held
 
-from gearlab.tui import GearlabApp, validating
+from gearlab.tui import GearlabApp
 
 
 def test_quitting_while_a_validation_runs_does_not_wait_for_it(tmp_path, monkeypatch):
@@ -21,12 +22,8 @@ def test_quitting_while_a_validation_runs_does_not_wait_for_it(tmp_path, monkeyp
         ended.set()
         return f"OK: {path.name}"
 
-    monkeypatch.setattr(validating, "validate_scenario", held)
     monkeypatch.setattr(threading, "excepthook", failed.append)
-    monkeypatch.chdir(tmp_path)
-    folder = tmp_path / "scenarios"
-    folder.mkdir()
-    (folder / "s.toml").write_text(STIFFNESS.replace("{runs}", "runs"))
+    folder = one_scenario_held(monkeypatch, tmp_path, held)
     notices = []
 
     async def script(pilot):

@@ -21,6 +21,16 @@ HISTORY = '{ file = "h.csv", role = "history", label = "healthy" }'
 TEST = '{ file = "t.csv", role = "test", label = "healthy" }'
 
 
+def one_scenario_held(monkeypatch, tmp_path, validate):
+    """tmp_path/scenarios (returned) holding one valid scenario, s.toml; the TUI's validation replaced by *validate*."""
+    monkeypatch.setattr(validating, "validate_scenario", validate)
+    monkeypatch.chdir(tmp_path)
+    folder = tmp_path / "scenarios"
+    folder.mkdir()
+    (folder / "s.toml").write_text(STIFFNESS.replace("{runs}", "runs"))
+    return folder
+
+
 def _palette_validate(folder) -> list[tuple[str, str]]:
     """(message, title) of each notice the TUI's palette 'Validate s.toml' shows, in *folder*."""
     notices = []
@@ -98,11 +108,7 @@ def test_the_screen_answers_keys_while_a_validation_runs_and_a_second_one_is_ref
         assert gate.wait(60), "never let go"  # a hung test's bound
         return f"OK: {path.name}"
 
-    monkeypatch.setattr(validating, "validate_scenario", held)
-    monkeypatch.chdir(tmp_path)
-    folder = tmp_path / "scenarios"
-    folder.mkdir()
-    (folder / "s.toml").write_text(STIFFNESS.replace("{runs}", "runs"))
+    folder = one_scenario_held(monkeypatch, tmp_path, held)
     notices = []
 
     async def script(pilot):
