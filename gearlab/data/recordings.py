@@ -53,6 +53,7 @@ from ..gearbox.speed import varies_words  # a run-up said so, with a tacho or wi
 from ..signals import check_signal, first_complete
 from ..signals.checks import VARIES_WORDS, fmt_hz, reversal, revolution_speeds, turn_times
 from ..signals.spikes import acquisition
+from ..units import rate_hz
 from . import raw_binary
 from .channel_units import STANDARD_GRAVITY as STANDARD_GRAVITY  # the one g of units and sensitivities
 from .channel_units import UNITS as UNITS
@@ -224,9 +225,19 @@ def read_channels(path, names: Sequence[str]) -> tuple[dict[str, np.ndarray], fl
 def rate_value(value, where: str, path: str) -> float:
     arr = np.asarray(value)
     shown = _one_line_repr(arr.item()) if arr.size == 1 else f"{arr.size} values"
-    if arr.dtype.kind not in "biuf" or arr.size != 1:
+    if arr.size == 1 and arr.dtype.kind in "US":  # a DAQ's rate as text with its unit, '25.6 kHz', as a scenario's fs
+        text = arr.item().decode("latin-1") if isinstance(arr.item(), bytes) else arr.item()
+        try:
+            fs = rate_hz(text.strip(), "")
+        except GearlabInputError as e:
+            raise GearlabInputError(
+                f"{path}: sampling rate field {where} must be one number in Hz or text with its unit, e.g. '25.6 kHz'"
+                f", got {shown} ({str(e).removeprefix(': ')})"
+            ) from None
+    elif arr.dtype.kind not in "biuf" or arr.size != 1:
         raise GearlabInputError(f"{path}: sampling rate field {where} must be one number in Hz, got {shown}")
-    fs = float(arr.item())
+    else:
+        fs = float(arr.item())
     if not math.isfinite(fs) or fs <= 0:
         raise GearlabInputError(f"{path}: sampling rate {where} must be positive, got {fs:g} Hz")
     return fs
