@@ -73,7 +73,7 @@ from .gearbox.speed import (
 )
 from .gearbox.speed_course import speed_course, speed_shift
 from .inspect_axes import stronger_axis
-from .inspect_tacho import elsewhere_line, marks_line, reversal_notes, shaft_and_marks, speed_channel
+from .inspect_tacho import elsewhere_line, marks_line, pulses_how, reversal_notes, shaft_and_marks, speed_channel
 from .signals import angle_from_pulses, resample_revolutions, revolution_starts, spectrum, tsa, unwrap_tacho, upsampled
 from .signals.checks import fmt_hz
 from .signals.fixed_lines import fixed_on_orders, modulation_pairs, modulation_words, smear_merged
@@ -205,7 +205,7 @@ def _tacho_speed(rec: Recording, box: Gearbox | None, options: InspectOptions) -
     else:
         with prefixed(f"{where} (read as {ppr} pulse(s) per revolution)"), speed_channel(rec.tacho):
             theta = angle_from_pulses(rec.tacho, rec.fs, smooth=ratio < 1, marks=ppr) / ppr
-        how = f"tacho '{rec.tacho_name}' ({ppr} pulse(s) per revolution) on the {shaft} shaft"
+        how = pulses_how(rec, ppr, shaft)
     theta = theta / ratio  # the input shaft's angle
     turns = (theta[-1] - theta[0]) / TWO_PI
     if turns <= 0:

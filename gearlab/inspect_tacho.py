@@ -20,6 +20,7 @@ from .gearbox import Gearbox, order_table
 from .gearbox.match import MIN_TEETH, STRONGEST, TACHO_SPEED_TOL, tacho_elsewhere, tacho_shaft_words, tol_mesh
 from .signals import resample_revolutions
 from .signals.checks import reversal, reversal_words, speed_varies, turn_times
+from .signals.tacho_mended import mended_words
 
 
 @contextmanager
@@ -187,3 +188,10 @@ def marks_line(check: dict, lines, ppr: int, bin_: float, ratio: float | None) -
                 + f": {marks_words(int(marks), ppr)}"
             ]
     return []
+
+
+def pulses_how(rec, ppr: int, shaft: str) -> str:
+    """How inspect read the speed from a pulse tacho of *ppr* marks a turn on *shaft*, with what its edges mended
+    (a missed pulse put back, a glitch's left out: signals.tacho_mended)."""
+    mended = mended_words(rec.tacho, rec.fs, ppr)
+    return f"tacho '{rec.tacho_name}' ({ppr} pulse(s) per revolution{mended}) on the {shaft} shaft"

@@ -53,6 +53,7 @@ from ..gearbox.speed import varies_words  # a run-up said so, with a tacho or wi
 from ..signals import check_signal, first_complete
 from ..signals.checks import VARIES_WORDS, fmt_hz, reversal, revolution_speeds, turn_times
 from ..signals.spikes import acquisition
+from ..signals.tacho_mended import mended_words
 from ..units import rate_hz
 from . import raw_binary
 from .channel_units import STANDARD_GRAVITY as STANDARD_GRAVITY  # the one g of units and sensitivities
@@ -576,11 +577,13 @@ def shaft_angle(
         raise GearlabInputError(f"{path}: tacho '{name}' (read as {what}{detected}): {exc}") from None
     except GearlabInputError as exc:
         raise GearlabInputError(f"{where}: {speed_channel_note(rec.tacho) or exc}") from None
+    mended = mended_words(rec.tacho, fs, pulses_per_rev)  # a missed pulse put back, a glitch's left out: said
     if pulses_per_rev == 1:
-        return {"pulses": rec.tacho}, angle, f"tacho '{name}' (once-per-revolution pulses{detected})"
+        return {"pulses": rec.tacho}, angle, f"tacho '{name}' (once-per-revolution pulses{detected}{mended})"
     angle = angle / pulses_per_rev
     # the wrapped angle in [-π, π): cut_revolutions unwraps it and starts revolutions at its 2πk crossings
-    return {"tacho": wrap(angle)}, unwrap_tacho(wrap(angle)), f"tacho '{name}' ({pulses_per_rev} pulses per revolution)"
+    how = f"tacho '{name}' ({pulses_per_rev} pulses per revolution{mended})"
+    return {"tacho": wrap(angle)}, unwrap_tacho(wrap(angle)), how
 
 
 def steady_start(

@@ -171,6 +171,49 @@ def angle_from_speed(n: int, fs: float, speed_hz: float, phase: float = 0.0) -> 
     return phase + TWO_PI * speed_hz * (np.arange(n, dtype=np.float64) / fs)
 
 
+def _rising_edges(pulses: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The pulse train *pulses* as floats, its rising edges (samples, between them; angle_from_pulses) and their
+    quantised flags: as read, before a missed pulse is put back or a glitch's left out."""
+    v = check_signal(pulses, "pulse train")
+    fs = check_positive(fs, "sampling rate fs", "Hz")
+    lo, hi = float(v.min()), float(v.max())
+    if hi == lo:
+        raise GearlabInputError(
+            f"pulse train is constant ({lo:g}) and has 0 rising edges; "
+            "at least 2 once-per-revolution pulses are needed to measure the speed"
+        )
+    mid = 0.5 * (lo + hi)
+    low_thr, high_thr = lo + 0.25 * (hi - lo), lo + 0.75 * (hi - lo)
+
+    # Schmitt trigger without a loop: known states where the level is unambiguous, carried
+    # forward through the hysteresis band (index of the last decided sample).
+    decided = (v > high_thr) | (v < low_thr)
+    last = np.maximum.accumulate(np.where(decided, np.arange(v.size), -1))
+    first_decided = int(np.argmax(decided))  # exists: min < low_thr < high_thr < max
+    state = v[np.where(last >= 0, last, first_decided)] > high_thr
+    switches = np.flatnonzero(~state[:-1] & state[1:]) + 1  # first "high" sample of each pulse
+
+    # Mid-level upward crossings between samples i and i+1, and the last one before each switch.
+    crossings = np.flatnonzero((v[:-1] < mid) & (v[1:] >= mid))
+    i = crossings[np.searchsorted(crossings, switches, side="right") - 1]
+    edges = i + (mid - v[i]) / (v[i + 1] - v[i])
+    quantised = (v[i] < low_thr) & (v[i + 1] > high_thr)  # no sample of the edge in the middle half
+
+    # a first "pulse" much shorter than the next ones is the record's start, not a turn: a pulse already
+    # rising (or a channel settling) at sample 0 made an edge there, a 27 % short first revolution
+    if edges.size >= 3 and edges[1] - edges[0] < FIRST_PULSE * np.median(np.diff(edges[1:10])):
+        edges, quantised = edges[1:], quantised[1:]
+    if edges.size < 2:
+        raise GearlabInputError(
+            f"pulse train has {edges.size} rising edge(s) in {v.size} samples "
+            f"({v.size / fs:.4g} s at {fmt_hz(fs)}); at least 2 once-per-revolution pulses are needed "
+            "to measure the speed"
+        )
+
+    _pulses_or_not(v, low_thr, high_thr, edges)
+    return v, edges, quantised
+
+
 def angle_from_pulses(pulses: np.ndarray, fs: float, smooth: bool = False, marks: int = 1) -> np.ndarray:
     """Once-per-revolution pulse train (any voltage) -> continuous shaft angle θ per sample (rad).
 
@@ -225,43 +268,7 @@ def angle_from_pulses(pulses: np.ndarray, fs: float, smooth: bool = False, marks
     *fs* (Hz) is not needed for the angle itself (it is per sample); it is checked and used
     to state speeds in messages.
     """
-    v = check_signal(pulses, "pulse train")
-    fs = check_positive(fs, "sampling rate fs", "Hz")
-    lo, hi = float(v.min()), float(v.max())
-    if hi == lo:
-        raise GearlabInputError(
-            f"pulse train is constant ({lo:g}) and has 0 rising edges; "
-            "at least 2 once-per-revolution pulses are needed to measure the speed"
-        )
-    mid = 0.5 * (lo + hi)
-    low_thr, high_thr = lo + 0.25 * (hi - lo), lo + 0.75 * (hi - lo)
-
-    # Schmitt trigger without a loop: known states where the level is unambiguous, carried
-    # forward through the hysteresis band (index of the last decided sample).
-    decided = (v > high_thr) | (v < low_thr)
-    last = np.maximum.accumulate(np.where(decided, np.arange(v.size), -1))
-    first_decided = int(np.argmax(decided))  # exists: min < low_thr < high_thr < max
-    state = v[np.where(last >= 0, last, first_decided)] > high_thr
-    switches = np.flatnonzero(~state[:-1] & state[1:]) + 1  # first "high" sample of each pulse
-
-    # Mid-level upward crossings between samples i and i+1, and the last one before each switch.
-    crossings = np.flatnonzero((v[:-1] < mid) & (v[1:] >= mid))
-    i = crossings[np.searchsorted(crossings, switches, side="right") - 1]
-    edges = i + (mid - v[i]) / (v[i + 1] - v[i])
-    quantised = (v[i] < low_thr) & (v[i + 1] > high_thr)  # no sample of the edge in the middle half
-
-    # a first "pulse" much shorter than the next ones is the record's start, not a turn: a pulse already
-    # rising (or a channel settling) at sample 0 made an edge there, a 27 % short first revolution
-    if edges.size >= 3 and edges[1] - edges[0] < FIRST_PULSE * np.median(np.diff(edges[1:10])):
-        edges, quantised = edges[1:], quantised[1:]
-    if edges.size < 2:
-        raise GearlabInputError(
-            f"pulse train has {edges.size} rising edge(s) in {v.size} samples "
-            f"({v.size / fs:.4g} s at {fmt_hz(fs)}); at least 2 once-per-revolution pulses are needed "
-            "to measure the speed"
-        )
-
-    _pulses_or_not(v, low_thr, high_thr, edges)
+    v, edges, quantised = _rising_edges(pulses, fs)
     edges, quantised, shift = _missed_marks(*_glitches(edges, quantised), marks)
     # most, not all: a square tacho's edge with a noisy sample mid-way now and then is still a square tacho's. A
     # missing-mark wheel's too (shift found), of any count: a 60-2 encoder's raw edges at 25.6 kHz left the angle
