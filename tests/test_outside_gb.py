@@ -58,7 +58,10 @@ def _one_stage_csv(path, seconds=2.0, f=24.0, seed=0, dc=0.25, missing_at=None, 
     return str(path)
 
 
-@pytest.mark.parametrize("flaw, said", [("missing_at", "1 missed pulse(s) put back (at 1"), ("glitch_at", "1 glitch pulse(s) left out (at 1")])
+@pytest.mark.parametrize(
+    "flaw, said",
+    [("missing_at", "1 missed pulse(s) put back (at 1"), ("glitch_at", "1 glitch pulse(s) left out (at 1")],
+)
 def test_a_tacho_pulse_mended_is_said_by_inspect_and_a_run(tmp_path, flaw, said):
     # the guide: 'what the logger did (... a tacho's missed or glitch pulse: mended; a run and gearlab score say it
     # too)'; a take whose tacho missed one pulse at 1.5 s read 'speed 23.999 Hz ... tacho 'tacho_V' (1 pulse(s) per
@@ -77,3 +80,42 @@ def test_a_tacho_pulse_mended_is_said_by_inspect_and_a_run(tmp_path, flaw, said)
     assert said in cut.angle_source, cut.angle_source
     clean = _one_stage_csv(tmp_path / "clean.csv", seconds=1.5)
     assert "put back" not in inspect_record(clean, described(ONE, speed="24 Hz"), options)["speed"]["source"]
+
+
+def _day_npz(path, takes=3, seconds=0.3, fs=25600.0):
+    """One .npz a day of several takes one after another, as a DAQ exports them: Dev1_ai0 (acc, V), Dev1_ai1
+    (tacho), a Take column, the rate as text."""
+    parts = [_mesh(fs=fs, seconds=seconds) for _ in range(takes)]
+    np.savez(
+        path,
+        Dev1_ai0=np.concatenate([p[1] for p in parts]),
+        Dev1_ai1=np.concatenate([p[2] for p in parts]),
+        Take=np.repeat(np.arange(1, takes + 1), parts[0][0].size),
+        fs=np.array("25.6 kHz"),
+    )
+    return path
+
+
+def test_a_take_named_alone_under_the_target_s_takes_key_is_that_take(tmp_path):
+    # [target] takes = "Take" (the day's history file split into its takes) beside test entries naming one take
+    # each, 'rec/day2.npz[Take=2]' as the guide writes them: validate said 'rec/day2.npz[Take=1][Take=1]: no such
+    # file'
+    from gearlab.parts.measured import target_files
+
+    (tmp_path / "rec").mkdir()
+    _day_npz(tmp_path / "rec" / "day1.npz")
+    _day_npz(tmp_path / "rec" / "day2.npz")
+    files = [
+        {"file": "rec/day1.npz", "role": "history", "label": "healthy"},
+        {"file": "rec/day2.npz[Take=1]", "role": "test", "label": "healthy"},
+        {"file": "rec/day2.npz[Take=2]", "role": "test", "label": "fault"},
+    ]
+    got = target_files(files, "s.toml: [target] 'files'", tmp_path, takes="Take")
+    assert [f.path for f in got] == [
+        "rec/day1.npz[Take=1]",
+        "rec/day1.npz[Take=2]",
+        "rec/day1.npz[Take=3]",
+        "rec/day2.npz[Take=1]",
+        "rec/day2.npz[Take=2]",
+    ]
+    assert [f.label for f in got][-2:] == ["healthy", "fault"]

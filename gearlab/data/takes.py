@@ -12,7 +12,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import GearlabInputError
-from ..files import take_file, take_name
+from ..files import split_take, take_file, take_name
 from .readers.take_rows import marks_of, no_take_column
 from .recordings import read_contents, read_header
 
@@ -20,7 +20,10 @@ from .recordings import read_contents, read_header
 def take_paths(file, column: str, where: str, name=None) -> list[str]:
     """The takes of *file* under *column*, in the order they first come: one name each (take_name, of *name*: the
     file as the scenario writes it). One line naming *where* where the column is missing (from the file's header,
-    as `gearlab validate` checks it), or where a take's rows are not one block."""
+    as `gearlab validate` checks it), or where a take's rows are not one block. A take named alone
+    ("day2.npz[Take=2]", under a [target]'s takes key that splits the other files) is that take, not split again."""
+    if split_take(file if name is None else name) is not None:
+        return [str(file if name is None else name)]
     file, name = take_file(file), file if name is None else name
     header = read_header(file)
     if header.channels and not header.find(column):
