@@ -119,3 +119,62 @@ def test_a_take_named_alone_under_the_target_s_takes_key_is_that_take(tmp_path):
         "rec/day2.npz[Take=2]",
     ]
     assert [f.label for f in got][-2:] == ["healthy", "fault"]
+
+
+TRANSFER = """\
+[scenario]
+name = "b37_transfer"
+kind = "transfer"
+
+[source]
+gearbox = "b37.toml"
+faults = {{ chip = [16, 18, 20] }}
+healthy = 48
+
+[target]
+file = "take.csv"
+vibration = "acc_V"
+tacho = "tacho_V"
+sensitivity = "100 mV/g"
+{labels}
+[[methods]]
+adapter = "source_only"
+"""
+
+B37 = """\
+[gearbox]
+name = "b37"
+
+[operation]
+speed = "1440 rpm"
+load = "40 N*m"
+
+[[stages]]
+module = "2.5 mm"
+pressure_angle = "25 deg"
+face_width = "20 mm"
+centre_distance = "118.75 mm"
+pinion = { z = 37, x = 0.3, bore = "25 mm" }
+wheel = { z = 58, x = -0.3, bore = "35 mm" }
+
+[sensor]
+near = "input"
+tacho = "input"
+"""
+
+
+def test_a_transfer_target_without_labels_is_refused_at_validate_naming_the_detection_kind(tmp_path):
+    # a transfer scenario whose [target] is one of the user's takes (no label column): validate said OK ('1
+    # methods x 6 k x 5 repetitions = 30 training runs'), the run built the source and then stopped: '[protocol] key
+    # 'ks': k = 4 target fault samples asked for, the target 'test_chip' has 0' (its revolutions unlabelled)
+    from gearlab.engine import load_scenario
+    from gearlab.errors import GearlabInputError
+
+    (tmp_path / "b37.toml").write_text(B37)
+    _one_stage_csv(tmp_path / "take.csv", seconds=0.5)
+    path = tmp_path / "transfer.toml"
+    path.write_text(TRANSFER.format(labels=""))
+    with pytest.raises(GearlabInputError) as err:
+        load_scenario(path)
+    said = str(err.value)
+    assert "[target]" in said and "'labels'" in said and "detection" in said and "\n" not in said, said

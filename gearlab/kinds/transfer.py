@@ -122,6 +122,13 @@ def build(scenario: Scenario) -> Spec:
     base = scenario.base or path.parent  # a run's copy of the scenario keeps its folder (--resume)
     source = dataset_spec(t["source"], location(path, "source"), base)
     target = dataset_spec(t["target"], location(path, "target"), base)
+    if isinstance(target, MeasuredSpec) and target.labels is None:
+        # its k-shot training and its accuracy read the target's labels: unlabelled, every k stopped the run later
+        raise GearlabInputError(
+            f"{location(path, 'target', 'labels')}: missing; the transfer kind trains on and scores the target's "
+            f"labels, {target.path} given none (a channel of each revolution's class, class_names); recordings "
+            "without labels: kind = 'detection' (docs/your_gearbox.md)"
+        )
     planned = planned_counts(source, location(path, "source")), planned_counts(target, location(path, "target"))
     if None not in planned:
         check_data(protocol, *planned, str(path))
