@@ -178,3 +178,19 @@ def test_a_transfer_target_without_labels_is_refused_at_validate_naming_the_dete
         load_scenario(path)
     said = str(err.value)
     assert "[target]" in said and "'labels'" in said and "detection" in said and "\n" not in said, said
+
+
+@pytest.mark.parametrize("written", ['"0.349 deg"', '"0.4363 °"'])
+def test_a_pressure_angle_in_radians_written_as_degrees_is_named_so(tmp_path, written):
+    # 0.349 (20 deg in radians) written with 'deg': '[[stages]] #1 key 'pressure_angle': '0.349 deg' is outside
+    # [10 deg, 35 deg]', the slip not named
+    from gearlab.errors import GearlabInputError
+    from gearlab.gearbox.description import load_gearbox
+
+    path = tmp_path / "b37.toml"
+    path.write_text(B37.replace('"25 deg"', written))
+    with pytest.raises(GearlabInputError) as err:
+        load_gearbox(path)
+    said = str(err.value)
+    assert "pressure_angle" in said and "radians" in said and "\n" not in said, said
+    assert ("20 deg" if "0.349" in written else "25 deg") in said, said

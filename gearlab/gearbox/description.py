@@ -454,6 +454,8 @@ class _Table:
             # ... and so is a number in quotes ('module = "2.5"' read "'2.5' is outside [0.1 mm, 100 mm]")
             bare = p.unit and _unitless(raw) and p.show(p.low) != f"{p.low:g} {p.unit}"
             said = f" (a bare number is in {p.unit}; expected e.g. '{raw} {p.display_unit}')" if bare else ""
+            if not bare and p.unit == "rad" and p.low <= (n := math.degrees(value)) <= p.high:  # radians as degrees
+                said = f" ({n:.4g} rad is {math.degrees(n):.3g} deg: radians written as degrees? expected the degrees)"
             raise GearlabInputError(f"{where}: {shown(raw)} is outside [{p.show(p.low)}, {p.show(p.high)}]{said}")
         return value
 
