@@ -194,3 +194,22 @@ def test_a_pressure_angle_in_radians_written_as_degrees_is_named_so(tmp_path, wr
     said = str(err.value)
     assert "pressure_angle" in said and "radians" in said and "\n" not in said, said
     assert ("20 deg" if "0.349" in written else "25 deg") in said, said
+
+
+def test_a_standard_centre_distance_beside_a_profile_shift_sum_names_the_working_one(tmp_path):
+    # x1 = +0.4, x2 = -0.1 (sum 0.3) at the zero-shift centre distance 118.75 mm: 'centre_distance: 118.8 mm
+    # contradicts ... which mesh at a_w = 119.5 mm; expected z1 + z2 = 95 at this module (95 teeth), ...': the
+    # user's 118.75 misquoted, and a tooth sum they already have offered as the remedy
+    from gearlab.errors import GearlabInputError
+    from gearlab.gearbox.description import load_gearbox
+
+    path = tmp_path / "b37.toml"
+    path.write_text(B37.replace("x = 0.3,", "x = 0.4,").replace("x = -0.3,", "x = -0.1,"))
+    with pytest.raises(GearlabInputError) as err:
+        load_gearbox(path)
+    said = str(err.value)
+    assert "118.75 mm contradicts" in said and "a_w = 119.49 mm" in said, said
+    assert "z1 + z2 = 95" not in said and "centre_distance = '119.49 mm'" in said, said
+    assert "x1 + x2 = 0.000" in said, said
+    path.write_text(B37.replace("x = 0.3,", "x = 0.4,").replace("x = -0.3,", "x = -0.1,").replace("118.75", "119.49"))
+    assert load_gearbox(path).stages[0].centre_distance == pytest.approx(0.11949)

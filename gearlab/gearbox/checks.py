@@ -117,8 +117,8 @@ def stage_geometry(stage) -> StageGeometry:
     return StageGeometry(d, d_b, d_a, d_f, alpha_w, a, a_w, epsilon, tuple(s_a), roll_start, roll_form)
 
 
-def _mm(v: float) -> str:
-    return f"{v * 1e3:.4g} mm"
+def _mm(v: float, digits: int = 4) -> str:
+    return f"{v * 1e3:.{digits}g} mm"
 
 
 def check_geometry(box) -> None:
@@ -155,6 +155,8 @@ def check_stage(stage) -> StageGeometry:
             fit = f"z1 + z2 = {teeth:.4g} at this module" + (
                 "" if abs(teeth - round(teeth)) > 0.01 else f" ({round(teeth)} teeth)"
             )
+            if abs(teeth - (z1 + z2)) <= 0.01:  # the teeth's zero-shift distance: the shifts' working one meant?
+                fit = f"centre_distance = '{_mm(g.a_w, 5)}', the working centre distance of these shifts"
             cos_w = g.a * math.cos(alpha) / given
             shift = ""
             if 0 < cos_w < 1:
@@ -162,8 +164,8 @@ def check_stage(stage) -> StageGeometry:
                 if -1.5 < x_fit < 2.5:
                     shift = f", or a profile shift sum x1 + x2 = {x_fit:.3f}"
             raise GearlabInputError(
-                f"{stage.where} key 'centre_distance': {_mm(given)} contradicts z1 = {z1}, z2 = {z2}, m = {_mm(m)}, "
-                f"x1 + x2 = {x_sum:g}, which mesh at a_w = {_mm(g.a_w)}; expected {fit}{shift}"
+                f"{stage.where} key 'centre_distance': {_mm(given, 5)} contradicts z1 = {z1}, z2 = {z2}, m = {_mm(m)}, "
+                f"x1 + x2 = {x_sum:g}, which mesh at a_w = {_mm(g.a_w, 5)}; expected {fit}{shift}"
             )
     for (_, gear), d_a, d_b, d_f in zip(gears, g.d_a, g.d_b, g.d_f):
         if d_a <= max(d_b, d_f):  # only a given tip diameter can be this small
