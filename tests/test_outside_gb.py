@@ -213,3 +213,15 @@ def test_a_standard_centre_distance_beside_a_profile_shift_sum_names_the_working
     assert "x1 + x2 = 0.000" in said, said
     path.write_text(B37.replace("x = 0.3,", "x = 0.4,").replace("x = -0.3,", "x = -0.1,").replace("118.75", "119.49"))
     assert load_gearbox(path).stages[0].centre_distance == pytest.approx(0.11949)
+
+
+def test_a_missing_npz_key_is_not_offered_the_channel_given_as_the_tacho(tmp_path):
+    # vibration 'Dev1_ai2' (no such key) beside tacho 'Dev1_ai1': "no vibration channel 'Dev1_ai2' (did you mean
+    # 'Dev1_ai1'?)", the tacho's own channel offered as the vibration
+    path = tmp_path / "daq.npz"
+    _, acc, tacho = _mesh()
+    np.savez(path, Dev1_ai0=acc, Dev1_ai1=tacho, fs=25600.0)
+    with pytest.raises(Exception) as err:
+        read_recording(path, "Dev1_ai2", "Dev1_ai1")
+    said = str(err.value)
+    assert "no vibration channel 'Dev1_ai2'" in said and "'Dev1_ai0'" in said and "mean 'Dev1_ai1'" not in said, said

@@ -200,8 +200,9 @@ def read_contents(path, names: Sequence[str], roles: dict[str, str] | None = Non
     for name in names:
         if name not in contents.found:
             role = f"{roles[name]} " if roles and name in roles else ""
+            free = [c for c in contents.available if c not in (roles or {})]  # not the tacho's own, given
             raise GearlabInputError(
-                f"{path}: no {role}channel '{name}'{channel_meant(name, contents.available, role.strip())}; "
+                f"{path}: no {role}channel '{name}'{channel_meant(name, free, role.strip())}; "
                 f"the file has: {_listing(contents.available)}"
             )
     return contents, fmt
