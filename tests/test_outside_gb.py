@@ -225,3 +225,18 @@ def test_a_missing_npz_key_is_not_offered_the_channel_given_as_the_tacho(tmp_pat
         read_recording(path, "Dev1_ai2", "Dev1_ai1")
     said = str(err.value)
     assert "no vibration channel 'Dev1_ai2'" in said and "'Dev1_ai0'" in said and "mean 'Dev1_ai1'" not in said, said
+
+
+def test_effects_dropped_that_widen_the_gap_at_their_final_fit_are_said_to_widen_it():
+    # the two-stage box's gap (--quick, its history one npz of 3 takes): 'sensor_noise (final fit: kind = gaussian,
+    # snr_db = -7.67) fitted, then not named: together -43 % of the gap', a share removed below zero
+    from gearlab.kinds.gap_verdict import dropped_text
+
+    result = {
+        "dropped_effects": [{"name": "sensor_noise", "params": {"kind": "gaussian", "snr_db": -7.67}}],
+        "dropped_share": -0.43,
+        "dropped_below": 0.99,
+    }
+    said = dropped_text(result)
+    assert "-43" not in said and "widen the gap by 43 %" in said, said
+    assert "together 93 % of the gap" in dropped_text({**result, "dropped_share": 0.93})

@@ -67,10 +67,11 @@ def dropped_text(result: Mapping) -> str:
     share, below = 100 * result["dropped_share"], 100 * result["dropped_below"]
     # as many decimals as it takes to show the share under the level (98.7 under 99, not 99 under 99)
     digits = next((d for d in range(4) if round(share, d) < round(below, d)), 3)
-    return (
-        f"{names} fitted, then not named: together {share:.{digits}f} % of the gap, {FINAL_FIT}, "
-        f"under the {below:.{digits}f} % a named set removes"
+    # a set that removes less than nothing at its final fit widens the gap: said so, not as '-43 % of the gap'
+    part = (
+        f"together {share:.{digits}f} % of the gap" if share >= 0 else f"together they widen the gap by {-share:.0f} %"
     )
+    return f"{names} fitted, then not named: {part}, {FINAL_FIT}, under the {below:.{digits}f} % a named set removes"
 
 
 def dropped_rows(result: Mapping) -> list[dict]:
