@@ -38,7 +38,12 @@ least, by the power gain of the mesh harmonic nearest each order (mesh_gain), wh
 its one-load history's mesh level put the input pinion over its threshold of 2.58 in 1 and 3 of 10 (its second
 sidebands by the input shaft, weak in the history, grew with the mesh), 0 of 10 so; weak chips on either gear are
 named as before at the history's load (z 19 and 32) and at 1.5 x (14 and 23, against 20 and 32: the history's
-terms of the null variance scale with the gain), development seeds 100-109.
+terms of the null variance scale with the gain), development seeds 100-109. A noise floor's change is no line change: a
+quieter or noisier sensor, or a faster rate (less noise an order), moves the noise alone. Where the lines are too few to
+read their gain from, r stands for it only where the lines show it, else 1 (line_gain): a one-shaft take read on a 25/30
+description whose meshes carry no line, its lines scaled by r, named the input shaft at z 36-38, 12-13 and 6.6-8.0
+(threshold 2.58) at 0.5 and 0.7 times its history's noise and at twice its rate, and read it at -7 to -8 at 1.5 times
+(a fault hidden); -0.6 to 0.5 so, development seeds 100-102.
 
 Everything is numpy: no torch, nothing from the layers above.
 """
@@ -186,6 +191,22 @@ def mesh_gain(rec: Content, ref: Spread, lay: Layout) -> np.ndarray:
     return gain[np.argmin(np.abs(lay.orders[:, None] - lay.orders[at][None, :]), axis=1)]
 
 
+def line_gain(rec: Content, ref: Spread, lay: Layout, r: float) -> float:
+    """The take's common gain of the history's lines: their ratio of sums off the mesh harmonics, where GAIN_LINES or
+    more. Fewer cannot be read apart from a change of their own shaft, and the take's level r (its noise floor's) stands
+    for their gain where the lines show it: a gain scales the lines and the noise alike, a quieter or noisier sensor
+    the noise alone. Of 1 (the history's) and r, the one nearer the ratio of sums of every history line, the mesh
+    harmonics' included (1 where r is 1: a change of the lines alone is read as before)."""
+    lines = ref.line & ~lay.carrier
+    if lines.sum() >= GAIN_LINES:
+        return float(rec.power[lines].sum() / ref.power[lines].sum())
+    every = ref.line & (ref.power > 0)
+    if not every.any():
+        return r
+    shown = max(float(rec.power[every].sum() / ref.power[every].sum()), 1e-12)
+    return r if abs(math.log(shown / r)) < abs(math.log(shown)) else 1.0
+
+
 def order_z(rec: Content, ref: Spread, lay: Layout) -> np.ndarray:
     """Each order's Δ in sds of its null spread: from the history times the take's level (level), on the lines times
     their ratio of sums, off them times a heavier load's up to LOAD_GAIN times the level, or the nearest mesh
@@ -199,7 +220,7 @@ def order_z(rec: Content, ref: Spread, lay: Layout) -> np.ndarray:
     # two noisy powers, skewed, and its median reads under the true gain (0.958 for lines 10 noise powers over zero),
     # so every line's Δ came out positive (the 21/63 + 24/56 reducer's healthy input shaft at z 0.92 on average,
     # 0.61 so, development seeds 48-50)
-    gain = float(rec.power[lines].sum() / ref.power[lines].sum()) if lines.sum() >= GAIN_LINES else r
+    gain = line_gain(rec, ref, lay, r)
     off = np.maximum(gain if r < gain <= LOAD_GAIN * r else r, mesh_gain(rec, ref, lay))
     g = np.where(lines, gain, off)
     # a gain under the take's level never narrows the history's spread: a slower gear's fault reads a faster shaft's
