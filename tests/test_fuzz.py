@@ -874,8 +874,17 @@ HUGE = [10**30, -(10**30), 2**64, 1e300, -1e300, float("inf"), float("nan"), 10*
 # fallback dataset cache, this module's stand-ins (every process that collects it makes its own) and an
 # executor's count folder (a TemporaryDirectory, removed by its own block). Another session's suite on the
 # same machine made and removed them between the two listings (a flaky failure, FlakyFailure: the
-# listing differed by a gearlab-fuzz-* and a gearlab-counts-* folder, not by a hostile name's).
-OTHERS_TMP = ("gearlab-cache-", "gearlab-fuzz-", "gearlab-counts-")
+# listing differed by a gearlab-fuzz-* and a gearlab-counts-* folder, not by a hostile name's). So do the
+# suite's other workers: a headless browser's profile (tests/browser.py), a local pool's shared arrays and
+# the session folders of another pytest run (conftest.session_folder): a gearlab-chromium-* folder once.
+OTHERS_TMP = (
+    "gearlab-cache-",
+    "gearlab-fuzz-",
+    "gearlab-counts-",
+    "gearlab-chromium-",
+    "gearlab-shared-",
+    "gearlab-test-",
+)
 
 
 def in_tmp() -> list[Path]:
