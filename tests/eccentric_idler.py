@@ -32,11 +32,7 @@ def take(seed: int, speed: float = 40.0, eccentric: float = 0.0, strike: Strike 
 
     rng = np.random.default_rng(seed)
     first = int(rng.integers(0, PERIOD))
-    t = np.arange(int(SECONDS * FS)) / FS
-    slow = np.cumsum(rng.standard_normal(t.size // 2000 + 2))
-    slow = (slow - slow.mean()) / max(np.abs(slow - slow.mean()).max(), 1e-12)
-    f = speed * (1 + 0.005 * np.interp(t, np.linspace(0, SECONDS, slow.size), slow))
-    u = first + np.r_[0.0, np.cumsum(f[:-1]) / FS]  # input turns from the angle's zero
+    t, u, f = J.wandering_turns(rng, first, speed, 0.005, SECONDS, FS)  # u: input turns from the angle's zero
     th, idler, out = 2 * np.pi * u, 2 * np.pi * u / 3, 2 * np.pi * u / 5
     x = 0.3 * np.cos(th + 0.4) + 0.2 * np.cos(idler + 1.1) + 0.15 * np.cos(out + 2.0)
     gear = 1 + sum(a * np.cos((j + 1) * out + 0.7 * j) for j, a in enumerate(OUTPUT))

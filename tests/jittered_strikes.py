@@ -31,6 +31,16 @@ class Strike:
     jitter: float = 0.5  # each strike's instant off by up to this share of a ring period (uniform)
 
 
+def wandering_turns(rng, first: int, speed: float, wander: float, seconds: float, fs: float):
+    """(t (s), u: input turns from the angle's zero, starting at turn *first*, f: the speed (Hz)) of a take of
+    *seconds* at *fs* whose speed wanders slowly (a random walk) by up to *wander* of *speed* (Hz)."""
+    t = np.arange(int(seconds * fs)) / fs
+    slow = np.cumsum(rng.standard_normal(t.size // 2000 + 2))
+    slow = (slow - slow.mean()) / max(np.abs(slow - slow.mean()).max(), 1e-12)
+    f = speed * (1 + wander * np.interp(t, np.linspace(0, seconds, slow.size), slow))
+    return t, first + np.r_[0.0, np.cumsum(f[:-1]) / fs], f
+
+
 def take(seed: int, strike: Strike | None = None, noise: float = 0.3, wander: float = 0.005):
     """(revolutions (R, 4096) from the take's first tacho mark, the first one's number from the input angle's zero
     modulo 61, the mean speed (Hz), FS) of a SECONDS take: each take starts at another turn of the train (the output
@@ -40,11 +50,7 @@ def take(seed: int, strike: Strike | None = None, noise: float = 0.3, wander: fl
 
     rng = np.random.default_rng(seed)
     first = int(rng.integers(0, WHEEL))
-    t = np.arange(int(SECONDS * FS)) / FS
-    slow = np.cumsum(rng.standard_normal(t.size // 2000 + 2))
-    slow = (slow - slow.mean()) / max(np.abs(slow - slow.mean()).max(), 1e-12)
-    f = SPEED * (1 + wander * np.interp(t, np.linspace(0, SECONDS, slow.size), slow))
-    u = first + np.r_[0.0, np.cumsum(f[:-1]) / FS]  # input turns from the angle's zero
+    t, u, f = wandering_turns(rng, first, SPEED, wander, SECONDS, FS)
     th, out = 2 * np.pi * u, 2 * np.pi * u * PINION / WHEEL
     x = 0.3 * np.cos(th + 0.4) + 0.2 * np.cos(out + 1.1)
     for h, a in ((1, 1.0), (2, 0.5), (3, 0.25)):
