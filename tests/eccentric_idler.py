@@ -19,10 +19,20 @@ from jittered_strikes import Strike
 BOX = "phm09"  # the rig's built-in description
 FS, SECONDS = 20_000.0, 4.0
 PERIOD = 15  # input turns of the train (idler 5, output 3)
+CHIP_KAPPA = (32 / (2 * np.pi)) ** 2  # the chip's dent: a von Mises bump of about a pitch's sd (2 pi / 32 rad)
 OUTPUT = (0.3, 0.2, 0.12, 0.08, 0.05, 0.04)  # the 80T gear's modulation of its mesh, per output-shaft harmonic
 
 
-def take(seed: int, speed: float = 40.0, eccentric: float = 0.0, strike: Strike | None = None, noise: float = 0.3):
+def take(
+    seed: int,
+    speed: float = 40.0,
+    eccentric: float = 0.0,
+    strike: Strike | None = None,
+    noise: float = 0.3,
+    phase: float = 2.2,
+    chip: tuple[float, float] | None = None,
+    runout: float = 0.0,
+):
     """(revolutions (R, POINTS) from the take's first tacho mark, the first one's number from the input angle's zero
     modulo PERIOD, the mean speed (Hz), FS) of a SECONDS take at about *speed* Hz (wandering by 0.5 %), the idler's
     48T pinion *eccentric* (its mesh's amplitude 1 + eccentric cos(idler angle)), *strike* on its shaft ("input",
@@ -36,12 +46,13 @@ def take(seed: int, speed: float = 40.0, eccentric: float = 0.0, strike: Strike 
     th, idler, out = 2 * np.pi * u, 2 * np.pi * u / 3, 2 * np.pi * u / 5
     x = 0.3 * np.cos(th + 0.4) + 0.2 * np.cos(idler + 1.1) + 0.15 * np.cos(out + 2.0)
     gear = 1 + sum(a * np.cos((j + 1) * out + 0.7 * j) for j, a in enumerate(OUTPUT))
+    dent = 0.0 if chip is None else chip[1] * np.exp(CHIP_KAPPA * (np.cos(th - 2 * np.pi * chip[0]) - 1))
     for h, a in ((1, 1.0), (2, 0.5), (3, 0.25)):  # the first mesh: the input pinion on the idler's 96T gear
-        am = 1 + 0.2 * np.cos(th + 0.3) + 0.1 * np.cos(idler + 1.0)
+        am = (1 + 0.2 * np.cos(th + 0.3) + 0.1 * np.cos(idler + 1.0)) * (1 - dent)
         x = x + a * am * np.cos(h * 32 * th + h)
     for h, a in ((1, 0.8), (2, 0.4), (3, 0.2)):  # the second: the idler's 48T pinion on the output's 80T gear
-        am = (1 + 0.1 * np.cos(idler + 0.5) + eccentric * np.cos(idler + 2.2)) * gear
-        x = x + a * am * np.cos(h * 16 * th + 2 * h)
+        am = (1 + 0.1 * np.cos(idler + 0.5) + eccentric * np.cos(idler + phase)) * gear
+        x = x + a * am * np.cos(h * 16 * th + 2 * h + h * runout * np.sin(idler + phase))
     x = x + noise * rng.standard_normal(t.size)
     if strike is not None:
         shaft = {"input": 1, "idler": 3, "output": 5}[strike.shaft]  # input turns a turn of the strike's shaft
