@@ -11,6 +11,7 @@ import pytest
 from conftest import unrendered
 from rich.console import Console
 from test_outside_h import BOX_B as BOX_B_H
+from test_tui import checked
 from textual.widgets import Static
 
 from gearlab.tui import GearlabApp
@@ -32,7 +33,7 @@ async def results_shown(detection_run, size: tuple[int, int] = (160, 45)):
     """The TUI in the run's folder at *size*, the Results tab of the run as the tree lists it: its pilot."""
     folder, run = detection_run
     async with GearlabApp(folder).run_test(size=size) as pilot:
-        await pilot.pause()
+        await checked(pilot)
         (entry,) = [r for e in pilot.app.entries for r in e.runs if r.path == run]
         pilot.app.show_results(entry)
         await pilot.pause()
@@ -58,7 +59,7 @@ def test_a_gearbox_description_beside_the_scenarios_is_listed_as_one(tmp_path, m
 
     async def main():
         async with GearlabApp(tmp_path).run_test(size=(160, 45)) as pilot:
-            await pilot.pause()
+            await checked(pilot)
             app = pilot.app
             good, bad = (next(e for e in app.entries if e.path.name == n) for n in ("boxB.toml", "bad_box.toml"))
             assert good.gearbox and "gearbox description 'boxB', stages 25/52, 16/81" in good.gearbox, good
@@ -165,7 +166,7 @@ def test_a_detection_run_from_the_tui_counts_its_finished_units(detection_run, m
     async def main():
         async with GearlabApp(folder).run_test(size=(160, 45)) as pilot:
             app = pilot.app
-            await pilot.pause()
+            await checked(pilot)
             app._move_to(folder / "det.toml")
             await pilot.pause()
             go.touch()  # the replay starts at once
@@ -215,7 +216,7 @@ def test_at_80_columns_a_wide_table_of_the_results_is_a_block_per_row(detection_
 async def scored_in_tui(pilot, run, typed: str) -> str:
     """s on *run* in the TUI, *typed* as the recordings and options, enter: the status line once score ended."""
     app = pilot.app
-    await pilot.pause()
+    await checked(pilot)
     app._move_to(run)
     await pilot.pause()
     await pilot.press("s")

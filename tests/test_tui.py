@@ -13,6 +13,7 @@ from __future__ import annotations
 import asyncio
 import json
 import shutil
+import threading
 import time
 from pathlib import Path
 
@@ -24,7 +25,7 @@ from tiny import TARGET_NOISE, transfer
 
 from gearlab.registry import load_registry
 from gearlab.runs import RunDir
-from gearlab.tui import GearlabApp
+from gearlab.tui import GearlabApp, catalog
 from gearlab.tui.catalog import error_line, run_entry
 from gearlab.tui.progress import stage_id
 
@@ -103,11 +104,12 @@ NARROW = SIZES[1]
 
 
 def drive(app: GearlabApp, script, size=(100, 30)):
-    """Run *script(pilot)* against *app* in a test harness."""
+    """Run *script(pilot)* against *app* in a test harness, once the tree's marks are all set."""
 
     async def main():
         async with app.run_test(size=size) as pilot:
             await pilot.pause()
+            await checked(pilot)
             await script(pilot)
 
     asyncio.run(main())
@@ -119,6 +121,19 @@ async def until(pilot, condition, limit: float = 120.0) -> None:
         assert pilot.app._exception is None, f"the TUI crashed: {pilot.app._exception!r}"
         assert time.monotonic() - start < limit, "the TUI did not get there in time"
         await pilot.pause(0.1)
+
+
+async def checked(pilot) -> None:
+    """Until every scenario's mark is set: the tree is listed first, its files validated after (tui.checking). Polled
+    by the loop's own sleep: a pilot.pause draws the screen at each turn."""
+    app = pilot.app
+    for _ in range(12000):  # 2 min at most
+        if all(entry.checked for entry in app.entries):
+            break
+        assert app._exception is None, f"the TUI crashed: {app._exception!r}"
+        await asyncio.sleep(0.01)
+    assert all(entry.checked for entry in app.entries), "the marks did not all come"
+    await pilot.pause()
 
 
 def labels(tree: Tree) -> list[str]:
@@ -153,6 +168,58 @@ def test_browser_lists_every_scenario_file_with_its_validation_status(folder):
         return go()
 
     drive(GearlabApp(folder), script)
+
+
+def test_the_tree_is_listed_at_once_and_its_marks_come_without_a_key(folder, monkeypatch):
+    gate, real = threading.Event(), catalog.load_scenario
+
+    def held(path=None, *, run=None):  # the validations wait until the first frames are read
+        assert gate.wait(30)
+        return real(path, run=run)
+
+    monkeypatch.setattr(catalog, "load_scenario", held)
+
+    async def main():
+        async with GearlabApp(folder).run_test(size=(100, 30)) as pilot:
+            app, tree = pilot.app, pilot.app.query_one("#browser", Tree)
+            try:
+                await pilot.pause()
+                assert labels(tree) == ["· bad.toml", "· more/binary.toml", "· stiff.toml"]
+                assert "not validated yet" in text_of(app, "#scenario-status")  # bad.toml, highlighted
+            finally:
+                gate.set()
+            await checked(pilot)  # no key pressed
+            assert labels(tree) == ["✗ bad.toml", "✗ more/binary.toml", "✓ stiff.toml"]
+            status = text_of(app, "#scenario-status")  # the highlighted file's view, drawn again with its error
+            assert "invalid" in status and "[stiffness] key 'pionts'" in status and "did you mean 'points'" in status
+
+    asyncio.run(main())
+
+
+def test_a_scenario_selected_or_run_before_its_mark_came_is_validated_then(folder):
+    app, started = GearlabApp(folder), []
+    app._check_pending = lambda: None  # no background validation: every mark stays pending until asked for
+    app.follow = lambda args: started.append(args)  # the command line a run would be
+
+    async def main():
+        async with app.run_test(size=(100, 30)) as pilot:
+            await pilot.pause()
+            tree = app.query_one("#browser", Tree)
+            await pilot.press("r")  # bad.toml, highlighted: validated, then refused
+            await pilot.pause()
+            assert labels(tree)[0] == "✗ bad.toml" and not started
+            await select(pilot, "stiff.toml")
+            assert labels(tree) == ["✗ bad.toml", "· more/binary.toml", "✓ stiff.toml"]
+            assert "stiff (stiffness)" in text_of(app, "#scenario-status")
+            tree.move_cursor(tree.root.children[1])
+            await pilot.pause()
+            await pilot.press("k")  # binary.toml: validated as it is run, refused
+            assert labels(tree)[1] == "✗ more/binary.toml" and not started
+            tree.move_cursor(tree.root.children[2])
+            await pilot.press("r")
+            assert started and started[0][:2] == ["run", str(folder / "stiff.toml")]
+
+    asyncio.run(main())
 
 
 def test_invalid_scenario_shows_its_error_with_file_table_and_key(folder):
@@ -435,6 +502,7 @@ def stable_scenarios(tmp_path, monkeypatch):
 @pytest.mark.parametrize("size", SIZES)
 def test_snapshot_scenario_view(snap_compare, stable_scenarios, size):
     async def before(pilot):
+        await checked(pilot)
         await select(pilot, "stiffness_verification.toml")
 
     assert snap_compare(GearlabApp(stable_scenarios), run_before=before, terminal_size=size)
@@ -443,6 +511,7 @@ def test_snapshot_scenario_view(snap_compare, stable_scenarios, size):
 @pytest.mark.parametrize("size", SIZES)
 def test_snapshot_invalid_scenario(snap_compare, folder, size):
     async def before(pilot):
+        await checked(pilot)
         await select(pilot, "bad.toml")
 
     assert snap_compare(GearlabApp(Path("scenarios")), run_before=before, terminal_size=size)
@@ -450,12 +519,12 @@ def test_snapshot_invalid_scenario(snap_compare, folder, size):
 
 @pytest.mark.parametrize("size", SIZES)
 def test_snapshot_plugins_view(snap_compare, stable_scenarios, size):
-    assert snap_compare(GearlabApp(stable_scenarios), press=["p"], terminal_size=size)
+    assert snap_compare(GearlabApp(stable_scenarios), run_before=checked, press=["p"], terminal_size=size)
 
 
 @pytest.mark.parametrize("size", SIZES)
 def test_snapshot_keys_panel(snap_compare, folder, size):
-    assert snap_compare(GearlabApp(Path("scenarios")), press=["question_mark"], terminal_size=size)
+    assert snap_compare(GearlabApp(Path("scenarios")), run_before=checked, press=["question_mark"], terminal_size=size)
 
 
 @pytest.fixture(scope="module")
@@ -475,6 +544,7 @@ def test_snapshot_results_of_a_stiffness_run(snap_compare, folder, tmp_path, qui
         (fixed / name).write_text((fixed / name).read_text().replace(str(base), str(tmp_path)))
 
     async def before(pilot):
+        await checked(pilot)
         node = node_named(pilot.app, "stiff.toml")
         node.expand()
         await pilot.pause()

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import pytest
 from conftest import ROOT, unrendered
+from test_tui import checked
 from textual.widgets import Tree
 
 from gearlab.tui import GearlabApp
@@ -34,7 +35,7 @@ def folder(tmp_path_factory):
 def test_right_unfolds_and_enters_left_leaves_and_folds(folder, size):
     async def main():
         async with GearlabApp(folder).run_test(size=size) as pilot:
-            await pilot.pause()
+            await checked(pilot)
             tree = pilot.app.query_one("#browser", Tree)
             node = next(n for n in tree.root.children if str(n.label).endswith("stiff.toml"))
             tree.focus()

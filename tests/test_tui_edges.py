@@ -19,6 +19,7 @@ from types import SimpleNamespace
 
 import pytest
 from conftest import ROOT, unrendered
+from test_tui import checked
 from textual.app import App
 from textual.command import CommandPalette
 from textual.geometry import Region
@@ -150,6 +151,7 @@ def test_no_bar_moves_when_no_run_is_in_progress(scenarios, clock, size):
     async def main():
         async with GearlabApp(scenarios).run_test(size=size) as pilot:
             app = pilot.app
+            await checked(pilot)  # no mark lands between the frames compared
             await pilot.press("2")
             await tab_underline_at_rest(pilot)  # the switch's own motion ends before anything is compared
             # nothing runs: a line that says so, no bar and nothing animated
@@ -196,6 +198,7 @@ def docs_keys() -> list[str]:
 def test_the_keys_panel_lists_every_documented_key_with_its_words_whole(scenarios, size):
     async def main():
         async with GearlabApp(scenarios).run_test(size=size) as pilot:
+            await checked(pilot)
             await pilot.press("question_mark")
             await pilot.pause()
             panel = pilot.app.screen
@@ -296,6 +299,7 @@ def test_plugin_parameters_show_their_doc_unit_and_bounds(scenarios, size):
     async def main():
         async with GearlabApp(scenarios).run_test(size=size) as pilot:
             app = pilot.app
+            await checked(pilot)
             await pilot.press("p")
             await pilot.pause()
             table = app.query_one("#plugin-table")
@@ -347,7 +351,7 @@ def test_names_stay_whole_or_are_cut_in_the_middle_with_the_whole_name_at_hand(s
             tree = app.query_one("#browser", Tree)
             # run_test returns with the first layout still pending (drawn when Textual's 1/60 s screen timer
             # fires): the screen read after it, not a frame that depends on whether that timer fired
-            await pilot.pause()
+            await checked(pilot)
             drawn = screen_text(app)
             # a scenario with runs (its ▶ takes two cells) and the longest shipped name: whole
             assert "▶ ✓ stiffness_verification.toml" in drawn
@@ -460,7 +464,7 @@ def test_every_key_of_the_docs_does_what_they_say(scenarios, monkeypatch):
         started = []
         app.follow = lambda args: started.append(args)  # the command line a run would be
         async with app.run_test(size=size) as pilot:
-            await pilot.pause()
+            await checked(pilot)
             tree = app.query_one("#browser", Tree)
             tabs = app.query_one("#views", TabbedContent)
             tree.focus()
@@ -590,7 +594,7 @@ def test_the_docs_finer_key_points_palette_escape_order_o_on_the_shown_run_and_q
     async def main():
         app = GearlabApp(scenarios)
         async with app.run_test(size=NARROW) as pilot:
-            await pilot.pause()
+            await checked(pilot)
             tree = app.query_one("#browser", Tree)
             tabs = app.query_one("#views", TabbedContent)
             await palette(pilot, "Open run stiff.toml 20260103")

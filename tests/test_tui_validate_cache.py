@@ -8,7 +8,7 @@ import os
 import shutil
 
 import pytest
-from test_tui import STIFFNESS, drive
+from test_tui import STIFFNESS, checked, drive
 from textual.widgets import Tree
 
 from gearlab.errors import GearlabInputError
@@ -67,13 +67,13 @@ def test_moving_through_the_tree_validates_each_scenario_and_run_once(tmp_path, 
         (folder / "tail.toml").write_text((folder / "tail.toml").read_text().replace("crack ladder", "edited"))
         later(folder / "tail.toml")
         await pilot.press("f5")
-        await pilot.pause()
+        await checked(pilot)  # the edited file only, in the background
         assert validations[3:] == ["tail.toml"]
         tail = next(n for n in tree.root.children if n.data.path.name == "tail.toml")
         assert tail.data.scenario.description == "edited"
         app._validate(tail.data)  # the palette's Validate reads the file afresh
         await app.workers.wait_for_complete()  # in a worker thread
-        await pilot.pause()
+        await checked(pilot)  # its end rescans: the file, forgotten, validated again for its mark
         assert validations[4:] == ["tail.toml"]
 
     drive(GearlabApp(folder), script)

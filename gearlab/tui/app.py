@@ -35,7 +35,8 @@ from ..notebook import load_scenario
 from ..runs import RunDir
 from ..scenario import Scenario
 from ..verdict import verdict_lines, verdict_table
-from .catalog import RunEntry, ScenarioEntry, Validated, error_line, run_entry, runs_base, scan
+from .catalog import RunEntry, ScenarioEntry, Validated, check, error_line, listing, run_entry, runs_base
+from .checking import Checking, scenario_label
 from .plugins import PluginsPane
 from .progress import Stages
 from .screens import KeysScreen, RunOptions, RunOptionsScreen, ScoreScreen
@@ -46,7 +47,7 @@ from .widgets import BrowserTree, ChartView, ResultTable, SummaryView, TomlSynta
 NARROW = 100
 
 
-class GearlabApp(Validating, App):
+class GearlabApp(Checking, Validating, App):
     TITLE = "gearlab"
     CSS = """
     #browser { width: 34; min-width: 20; max-width: 45%; border-right: solid $primary-darken-2; }
@@ -141,6 +142,7 @@ class GearlabApp(Validating, App):
         self.running: dict[str, str] = {}  # units in progress: how far each is
         self.charts: list = []
         self.chart_index = 0
+        self.toml_shown: tuple[str, set[int]] | None = None  # the scenario TOML on show, its highlighted lines
 
     # ------------------------------------------------------------------ layout
     def compose(self) -> ComposeResult:
@@ -204,17 +206,15 @@ class GearlabApp(Validating, App):
             tree.root.add_leaf(Text(f"no such directory: {self.directory}", style="red"))
             self.entries = []
             return
-        self.entries = scan(self.directory, self.cwd, self.validated)
+        self.entries = listing(self.directory)
+        for entry in self.entries:  # files as Validated last saw them marked at once, the others pending
+            check(entry, self.validated, self.cwd, wait=False)
         if not self.entries:
             tree.root.add_leaf(Text("no scenario files (*.toml) here", style="dim"))
         target = None
         for entry in self.entries:
             name = str(entry.path.relative_to(self.directory))
-            good = entry.ok or bool(entry.gearbox)
-            label = Text.assemble(("✓ " if good else "✗ ", "green" if good else "red"), name)
-            if entry.gearbox is not None:
-                label.append(" gearbox", style="dim")
-            node = tree.root.add(label, data=entry, expand=False, allow_expand=bool(entry.runs))
+            node = tree.root.add(scenario_label(entry, name), data=entry, expand=False, allow_expand=bool(entry.runs))
             target = node if entry.path == keep else target
             for run in entry.runs:
                 leaf = node.add_leaf(self._run_label(run), data=run)
@@ -226,6 +226,7 @@ class GearlabApp(Validating, App):
         line = self._line_of(target) if target is not None else None
         # nothing kept (the first scan, or the file went): the first scenario, not the folder
         tree.cursor_line = line if line is not None else (1 if self.entries else 0)
+        self._check_pending()
 
     def _line_of(self, target) -> int | None:
         """The tree line a node is drawn on (the root is line 0; folded children have none)."""
@@ -264,6 +265,8 @@ class GearlabApp(Validating, App):
         if not self.query("#views"):  # a highlight queued while the app closes: the views are gone
             return
         if isinstance(data, ScenarioEntry):
+            if switch:
+                self._check_now(data)
             self.show_scenario(data, switch)
         elif isinstance(data, RunEntry):
             self.show_scenario(self.scenario_of(data))
@@ -276,12 +279,18 @@ class GearlabApp(Validating, App):
         if entry is None:
             status.update("select a scenario")
             toml.update("")
+            self.toml_shown = None
             return
         try:
             text = entry.path.read_text()
         except (OSError, UnicodeDecodeError) as exc:
             text = f"# cannot read {entry.path}: {exc}"
-        if entry.gearbox:
+        if not entry.checked:
+            status.update(
+                Text.assemble(("· not validated yet", "dim"), f"  {self._shown(entry.path)}: its mark comes shortly")
+            )
+            marked = set()
+        elif entry.gearbox:
             status.update(
                 Text.assemble(
                     ("✓ valid", "bold green"),
@@ -307,7 +316,9 @@ class GearlabApp(Validating, App):
             status.update(Text.assemble(("✗ invalid  ", "bold red"), entry.error))
             line = error_line(text, entry.error)
             marked = {line} if line else set()
-        toml.update(TomlSyntax(text, highlight_lines=marked))
+        if self.toml_shown != (text, marked):  # the same TOML (its mark come, the cursor back on it): drawn once
+            self.toml_shown = (text, marked)
+            toml.update(TomlSyntax(text, highlight_lines=marked))
         if switch:
             self.switch_to("scenario")
 
@@ -335,6 +346,7 @@ class GearlabApp(Validating, App):
     def _runnable(self) -> ScenarioEntry | None:
         """The highlighted scenario (or the scenario of the highlighted run), when it can run."""
         entry = self.scenario_of(self.highlighted())
+        self._check_now(entry)
         if self.process is not None:
             self.notify("a run is in progress; c cancels it", severity="warning")
         elif entry is not None and entry.gearbox is not None:
@@ -703,7 +715,7 @@ class GearlabApp(Validating, App):
         yield from super().get_system_commands(screen)
         for entry in self.entries:
             name = str(entry.path.relative_to(self.directory))
-            if entry.ok:
+            if entry.ok or not entry.checked:  # a pending one is validated as it is run (_runnable)
                 yield SystemCommand(f"Run {name}", "run this scenario", lambda e=entry: self._palette_run(e, False))
                 yield SystemCommand(
                     f"Quick run {name}", "run it shrunk (--quick)", lambda e=entry: self._palette_run(e, True)

@@ -6,6 +6,7 @@ Nothing here draws; the app turns these entries into tree nodes and views.
 from __future__ import annotations
 
 import re
+import threading
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,6 +26,7 @@ class ScenarioEntry:
     runs: list[RunEntry] = field(default_factory=list)
     # a gearbox description ([gearbox] or [[stages]], no [scenario]): validate's OK line, or "" with its error
     gearbox: str | None = None
+    checked: bool = False  # validated (check): until then it is listed by name alone, its mark pending
 
     @property
     def ok(self) -> bool:
@@ -70,49 +72,74 @@ def _named_files(path: Path, base: Path) -> list[Path]:
     return found
 
 
+class Unsettled(Exception):
+    """Validated was asked for a result it keeps, and keeps none for the files' present state."""
+
+
 class Validated:
     """Scenario files validated once per state of the files they are read from (their own and the
     files their strings name: path, modification time, size): a stiffness scenario's validation
     builds its fault ladders (0.07 s each), and the tree asked for it again on every rescan and every
     highlight of one of its runs, so moving through the tree waited for it. An edited file is
-    validated again; `Validate` in the command palette always reads the file afresh (forget)."""
+    validated again; `Validate` in the command palette always reads the file afresh (forget).
+
+    The tree's marks are validated in a thread (checking.py) while the app's thread may ask for one
+    at once (a scenario selected before its mark came): one validation at a time, so that a file is
+    never validated twice at once and two threads never import a kind's modules into each other."""
 
     def __init__(self):
         self._seen: dict[tuple, tuple[tuple, Scenario | None, Exception | None]] = {}
+        self._loading = threading.Lock()
 
-    def _load(self, key: tuple, files: list[Path], load) -> Scenario:
-        state = tuple(_stamp(f) for f in files)
+    def _load(self, key: tuple, files, load, wait: bool = True) -> Scenario:
+        """load()'s result (or its exception, raised again) for the present state of files(); with
+        wait=False, Unsettled where it would have to be read (no file is read for a key never seen)."""
+        if not wait and key not in self._seen:
+            raise Unsettled(key)
+        state = tuple(_stamp(f) for f in files())
         seen = self._seen.get(key)
         if seen is None or seen[0] != state:
-            try:
-                seen = (state, load(), None)
-            except Exception as exc:  # noqa: BLE001 - kept to raise again for the same files
-                seen = (state, None, exc)
-            self._seen[key] = seen
+            if not wait:
+                raise Unsettled(key)
+            with self._loading:
+                seen = self._seen.get(key)  # the other thread may have read it meanwhile
+                if seen is None or seen[0] != state:
+                    try:
+                        seen = (state, load(), None)
+                    except Exception as exc:  # noqa: BLE001 - kept to raise again for the same files
+                        seen = (state, None, exc)
+                    self._seen[key] = seen
         if seen[2] is not None:
             raise seen[2]
         return seen[1]
 
-    def scenario(self, path: Path) -> Scenario:
+    def scenario(self, path: Path, wait: bool = True) -> Scenario:
         """load_scenario(path), read again only when a file it reads changed."""
         path = Path(path)
-        files = [path, *_named_files(path, path.parent)]
-        return self._load(("file", path), files, lambda: load_scenario(path))
+        return self._load(
+            ("file", path), lambda: [path, *_named_files(path, path.parent)], lambda: load_scenario(path), wait
+        )
 
     def of_run(self, run: RunDir) -> Scenario:
         """The scenario *run* ran (load_scenario(run=...)), read again only when its files changed."""
-        files = [run.path / name for name in ("scenario.toml", "scenario.original.toml", "run.json")]
-        files += _named_files(run.scenario_path(), run.base() or run.path)
+
+        def files() -> list[Path]:
+            names = [run.path / name for name in ("scenario.toml", "scenario.original.toml", "run.json")]
+            return names + _named_files(run.scenario_path(), run.base() or run.path)
+
         return self._load(("run", run.path), files, lambda: load_scenario(run=run))
 
-    def description(self, path: Path) -> str | None:
+    def description(self, path: Path, wait: bool = True) -> str | None:
         """validated_description(path): a gearbox description's OK line (its mistake raised), None for a
         scenario; read again only when a file it reads changed."""
-        from ..gearbox import validated_description
+
+        def load() -> str | None:
+            from ..gearbox import validated_description
+
+            return validated_description(path)
 
         path = Path(path)
-        files = [path, *_named_files(path, path.parent)]
-        return self._load(("gearbox", path), files, lambda: validated_description(path))
+        return self._load(("gearbox", path), lambda: [path, *_named_files(path, path.parent)], load, wait)
 
     def forget(self, path: Path) -> None:
         self._seen.pop(("file", Path(path)), None)
@@ -124,33 +151,47 @@ def scan(directory: Path, cwd: Path, validated: Validated | None = None) -> list
     state of its files), with the runs found under its output dir (a relative one taken from *cwd*, the
     folder the TUI starts its runs in)."""
     validated = validated or Validated()
-    entries = []
-    for path in sorted(Path(directory).rglob("*.toml")):
-        if in_run(path, Path(directory)):
-            continue
-        entry = ScenarioEntry(path)
-        # the gearbox description a user writes beside the scenarios that name it (docs/your_gearbox.md) is
-        # one, checked as `gearlab validate` checks it: it was listed as an invalid scenario, 'missing table
-        # [scenario]', in red beside the valid ones
+    entries = listing(directory)
+    for entry in entries:
+        check(entry, validated, cwd)
+    return entries
+
+
+def listing(directory: Path) -> list[ScenarioEntry]:
+    """Every *.toml under *directory* but a run's copies (in_run), by name alone: nothing read yet."""
+    found = sorted(Path(directory).rglob("*.toml"))
+    return [ScenarioEntry(path) for path in found if not in_run(path, Path(directory))]
+
+
+def check(entry: ScenarioEntry, validated: Validated, cwd: Path, wait: bool = True) -> bool:
+    """Validate *entry*'s file (by *validated*, once per state of its files) and find its runs under its
+    output dir (a relative one taken from *cwd*, the folder the TUI starts its runs in). With wait=False
+    only a kept result is used: False, the entry left unchecked, where the file must be read."""
+    path = entry.path
+    # the gearbox description a user writes beside the scenarios that name it (docs/your_gearbox.md) is
+    # one, checked as `gearlab validate` checks it: it was listed as an invalid scenario, 'missing table
+    # [scenario]', in red beside the valid ones
+    try:
+        entry.gearbox = validated.description(path, wait)
+    except Unsettled:
+        return False
+    except GearlabInputError as exc:
+        entry.gearbox, entry.error = "", str(exc)
+    except Exception:  # noqa: BLE001 - read as a scenario below, which says what is wrong
+        entry.gearbox = None
+    if entry.gearbox is None:
         try:
-            entry.gearbox = validated.description(path)
-        except GearlabInputError as exc:
-            entry.gearbox, entry.error = "", str(exc)
-        except Exception:  # noqa: BLE001 - read as a scenario below, which says what is wrong
-            entry.gearbox = None
-        if entry.gearbox is not None:
-            entries.append(entry)
-            continue
-        try:
-            entry.scenario = validated.scenario(path)
+            entry.scenario = validated.scenario(path, wait)
+        except Unsettled:
+            return False
         except GearlabInputError as exc:
             entry.error = str(exc)
         except Exception as exc:  # noqa: BLE001 - a browser must list every file, whatever is wrong with it
             entry.error = f"{path}: cannot be read: {type(exc).__name__}: {exc}"
         if entry.scenario is not None:
             entry.runs = runs_of(entry.scenario, cwd)
-        entries.append(entry)
-    return entries
+    entry.checked = True
+    return True
 
 
 def in_run(path: Path, directory: Path) -> bool:

@@ -15,7 +15,6 @@ from textual.app import ComposeResult
 from textual.containers import Vertical, VerticalScroll
 from textual.widgets import DataTable, Static
 
-from .. import registry as plugins
 from ..units import display
 
 PADDING = 2  # cells a DataTable column adds to its width (one each side)
@@ -43,6 +42,8 @@ def bounds_text(param: dict) -> str:
 
 def detail(row: dict) -> Group:
     """What a plugin is and what each parameter means: the row of Registry.describe() in words."""
+    from .. import registry as plugins
+
     head = Text.assemble((row["name"], "bold"), f"  {plugins.kind_text(row)}, package {row['package']}")
     parts = [head, Text(row.get("doc") or "(no description)")]
     if row["params"]:
@@ -90,6 +91,10 @@ class PluginsPane(Vertical):
         if self.filled:
             return
         self.filled = True
+        # the registry (the effects' and dynamics' modules, 0.1 s of CPU) imported when the tab is first shown,
+        # not before the first screen
+        from .. import registry as plugins
+
         registry = plugins.get_registry()  # looked up at call time: a test may give its own registry
         self.rows = registry.describe()
         self.fill(40)
@@ -108,6 +113,8 @@ class PluginsPane(Vertical):
             self.fill(width)
 
     def fill(self, params_width: int) -> None:
+        from .. import registry as plugins
+
         table = self.query_one("#plugin-table", DataTable)
         row_at = table.cursor_row
         table.clear(columns=True)
