@@ -8,10 +8,10 @@ Validated keeps for its files' present state (a rescan of unchanged files) is ma
 only the new and the edited ones. Selecting or running a scenario whose mark is still pending validates it then, on
 the app's thread (Validated waits for the worker's file in progress, if any, and never reads a file twice).
 
-Each file is validated in a daemon thread of its own, awaited by an async worker, as the palette's Validate is
-(validating.py): quitting cancels the worker and the app's run returns without waiting for the file in progress; its
-result, come after the app has gone, is dropped. The thread fills an entry of its own, copied into the tree's entry
-on the app's thread, so that the views never read an entry half filled.
+The files are validated in daemon threads, a batch each (BATCH_S), awaited by an async worker as the palette's
+Validate is (validating.py): quitting cancels the worker and the app's run returns without waiting for the batch in
+progress; its result, come after the app has gone, is dropped. The thread fills entries of its own, copied into the
+tree's entries on the app's thread, so that the views never read an entry half filled.
 """
 
 from __future__ import annotations
