@@ -338,14 +338,15 @@ def test_missing_channel_lists_what_exists(files):
         spec_for(path, vibration="acc1", speed_hz=25),
         "no vibration channel 'acc1'",
         "(did you mean 'acc'?)",
-        "the file has: acc, tacho, label, fs",
+        "the file has channels: acc, tacho, label (and the sampling rate 'fs')",
     )
     fails(
         spec_for(files["h5"][0], vibration="rig/acc", tacho="rig/tach"),
         "no tacho channel 'rig/tach'",
         "did you mean 'rig/tacho'",
     )
-    fails(spec_for(files["wav-int16"][0], vibration="2", speed_hz=25), "no vibration channel '2'", "the file has: 0, 1")
+    wav = spec_for(files["wav-int16"][0], vibration="2", speed_hz=25)
+    fails(wav, "no vibration channel '2'", "the file has channels: 0, 1")
 
 
 def test_non_numeric_channels(rec, tmp_path, files):

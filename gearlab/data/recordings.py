@@ -62,7 +62,7 @@ from .channel_units import channel_scale as channel_scale
 from .channel_units import level_hint as level_hint
 from .channel_units import name_unit as name_unit  # what a channel's name says of its unit
 from .readers import Contents, check_size, parsed
-from .readers.base import _listing, _one_line, _one_line_repr, column_of, matrix_column, not_time
+from .readers.base import _listing, _one_line, _one_line_repr, channel_listing, column_of, matrix_column, not_time
 from .readers.base import is_rate_or_time as is_rate_or_time  # the one list of rate and time names
 from .readers.base import time_scale as time_scale
 from .readers.headers import HEADERS, Header, time_hint
@@ -139,11 +139,6 @@ def check_measured_file(path: Path, where: str = "", expected: str = "") -> None
         )
 
 
-def channel_listing(names) -> str:
-    """A file's channel names on one line, for messages (long lists cut short)."""
-    return _listing(names)
-
-
 def supported() -> str:
     return ", ".join(FORMATS)
 
@@ -203,7 +198,7 @@ def read_contents(path, names: Sequence[str], roles: dict[str, str] | None = Non
             free = [c for c in contents.available if c not in (roles or {})]  # not the tacho's own, given
             raise GearlabInputError(
                 f"{path}: no {role}channel '{name}'{channel_meant(name, free, role.strip())}; "
-                f"the file has: {_listing(contents.available)}"
+                f"the file has channels: {channel_listing(contents.available)}"
             )
     return contents, fmt
 
@@ -781,8 +776,8 @@ def check_recording(
             index = " (or a 0-based column index)" if header.indexed else ""
             raise GearlabInputError(
                 f"{where} key '{key}': {path} has no channel {_one_line_repr(name)}"
-                f"{channel_meant(str(name), header.channels, key)}; the file has: "
-                f"{_listing(header.channels)}{index}"
+                f"{channel_meant(str(name), header.channels, key)}; the file has channels: "
+                f"{channel_listing(header.channels)}{index}"
             )
         header.check_channel(header.resolve(name), f"{where} key '{key}'", path)  # no time column, a series
     asked = [str(channel_key(v)) for v in channels.values() if v not in (None, "")]

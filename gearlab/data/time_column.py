@@ -22,6 +22,19 @@ _TIME_JITTER = 0.25
 _TAKE_COLUMN = re.compile(r"(take|segment|trial|run|block|burst|chunk)[\s_#.-]*(no|nr|num|number|id|index)?\.?", re.I)
 
 
+# A time column written in other units than seconds, as gearlab.data.readers.base._time_field names it: its errors
+# say its times in its own unit ('time_ms' going back was said as '0.10045 -> 0.1004 s ... in seconds')
+_SCALED = re.compile(r"\(x ([0-9.e+-]+) s\)$")
+_UNIT_OF_SCALE = {1e-3: "ms", 1e-6: "µs"}
+
+
+def _written_unit(where: str) -> tuple[str, float]:
+    """(unit, seconds per value) in which the time column *where* was written."""
+    match = _SCALED.search(where)
+    scale = float(match.group(1)) if match else 1.0
+    return (_UNIT_OF_SCALE[scale], scale) if scale in _UNIT_OF_SCALE else ("s", 1.0)
+
+
 def take_columns(available: Sequence) -> list[str]:
     """The columns of *available* whose name says they number takes ('take', 'Segment #', 'run_id')."""
     return [str(c) for c in available if _TAKE_COLUMN.fullmatch(str(c).strip())]
@@ -72,7 +85,10 @@ def rate_from_time(value, where: str, path: str, n: int | None, takes: Sequence[
     steps = np.diff(t)
     if np.any(steps <= 0):
         i = int(np.flatnonzero(steps <= 0)[0])
-        said = f"{path}: {where} does not increase between samples {i} and {i + 1} ({t[i]:.9g} -> {t[i + 1]:.9g} s)"
+        unit, per = _written_unit(where)
+        shown = t if per == 1.0 else written_as / per
+        said = f"{path}: {where} does not increase between samples {i} and {i + 1} "
+        said += f"({shown[i]:.9g} -> {shown[i + 1]:.9g} {unit})"
         mean, step = (t[-1] - t[0]) / (t.size - 1), np.min(steps[steps > 0], initial=np.inf)
         # stamped to 1 ms at 25.6 kHz, or written to 0.1 ms at 12.8 kHz (1.28 periods: 0.0002, 0.0002, 0.0003)
         coarse = step > 1.5 * mean or np.median(_written_resolution(written_as)) * scale > mean
@@ -83,12 +99,12 @@ def rate_from_time(value, where: str, path: str, n: int | None, takes: Sequence[
             i, marked = int(restarts[0]), f", its takes marked by column {takes[0]!r}" if takes else ""
             key = f"takes = {takes[0]!r}" if takes else "takes = '<the column marking them>'"
             raise GearlabInputError(
-                f"{path}: {where}: the time restarts at sample {i + 1} ({t[i]:.9g} -> {t[i + 1]:.9g} s; "
+                f"{path}: {where}: the time restarts at sample {i + 1} ({shown[i]:.9g} -> {shown[i + 1]:.9g} {unit}; "
                 f"{restarts.size + 1} runs of time in all): several takes one after another in one file{marked}? "
                 f"expected one take a recording: give {key} (each take a recording of its own; one alone by its name, "
                 f"'{path}[{takes[0] if takes else 'take'}=1]') or write one file per take"
             )
-        raise GearlabInputError(f"{said}; expected increasing times in seconds")
+        raise GearlabInputError(f"{said}; expected increasing times in {'seconds' if unit == 's' else unit}")
     span = float(t[-1] - t[0])
     dt = span / (t.size - 1)
     # off the least-squares line, not the one through the ends: a jittered first or last stamp would tilt that

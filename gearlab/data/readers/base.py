@@ -290,3 +290,14 @@ def _listing(names: Iterable[str], limit: int = 12) -> str:
         return "none"
     shown = ", ".join(names[:limit])
     return shown if len(names) <= limit else f"{shown}, … ({len(names)} in all)"
+
+
+def channel_listing(names: Iterable[str]) -> str:
+    """A file's channels on one line, for messages, its sampling-rate and time fields said apart: they are no
+    channels (validate listed an npz's 'Dev1_ai0, Dev1_ai1, Time, fs' and a CSV's 'time_s, acc_V, tacho_V')."""
+    names = list(names)
+    fields = [n for n in names if is_rate_or_time(str(n))]
+    said = _listing([n for n in names if n not in fields])
+    kind = {n: "sampling rate" if named(str(n).rsplit("/", 1)[-1]) else "time" for n in fields}
+    what = [f"the {kind[n]} '{' '.join(str(n).split())}'" for n in fields]
+    return said + (f" (and {', '.join(what)})" if what else "")

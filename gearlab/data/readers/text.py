@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import GearlabInputError, shown
-from .base import Contents, _keyed, check_size, max_record_bytes, time_scale
+from .base import Contents, _keyed, channel_listing, check_size, max_record_bytes, time_scale
 from .csv import (
     DECIMAL_COMMA_SEPARATORS,
     column_index,
@@ -179,7 +179,7 @@ def _resolve(columns, header: list[str] | None, width: int, where: str) -> list[
         elif header is not None and c in header:
             out.append(header.index(c))
         else:
-            known = ", ".join(header) if header else f"no header row, so indices 0 … {width - 1}"
+            known = channel_listing(header) if header else f"no header row, so indices 0 … {width - 1}"
             raise GearlabInputError(f"{where}: no column named {shown(c)}; known: {known}")
     return out
 
