@@ -100,6 +100,7 @@ from .conclusion import (
 from .identify import _plain, alias_refit
 from .level import carried, fitted_here, free, held, level_differs, leveling, own_or, score_stands
 from .lines import TONE, masked, tone_line
+from .record_lines import round_line, widened
 from .scoring import NUISANCE, Rows, Scorer, Settings, _by_level, _paired_removal, _prepared, _report, check_settings
 from .search import Space, _fine, _key, _NoiseNuisance, fit_effect, profile_effect, quick_profile_evaluations
 from .stats import REPORT_PARTS, classifier_loaded, load_classifier
@@ -591,9 +592,12 @@ def attribution(
             noise, noise_paired = (), None
             paired = _paired_removal(scorer, current, alone, seed + r)
     share = paired["removed"] / paired["gap_now"] if paired["gap_now"] > 0 else 0.0
-    ok = share >= MIN_SHARE and paired["removed_low"] > 0.0
+    # ... and the report's gap not widened on the revolutions' own features (gearlab.gap.record_lines)
+    wider = widened(scorer, current, candidate_rows, seed + r) if share >= MIN_SHARE else None
+    ok = share >= MIN_SHARE and paired["removed_low"] > 0.0 and wider is None
     info.update(best=top["name"], share_of_remaining=share, removed_low=paired["removed_low"], accepted=ok)
-    run.on_event(Event("log", message=round_line(r, top["name"], share, ok)))
+    info.update({"widens_report": wider} if wider else {})
+    run.on_event(Event("log", message=round_line(r, top["name"], share, ok, wider)))
     if not ok:
         return None
     own = paired["removed"]
@@ -634,16 +638,6 @@ def attribution(
         )
         info["nuisance"] = top["nuisance"]
     return refit + (spec,) + noise, refit, entries
-
-
-def round_line(r: int, name: str, share: float, ok: bool) -> str:
-    """The progress line of round *r*'s decision. Its share is the round's fit's, on fresh revolutions: an
-    outside lab's sensor_noise read '97.8 % ... (accepted)' beside the verdict's 98.2 % (round 1's search)
-    and the summary's 98.8 % (final fit), with no word of which fit each was (issue 39 item 4)."""
-    return (
-        f"gap: round {r}: {name} removes {100 * share:.1f} % of the gap left, at round {r}'s fit on fresh "
-        f"revolutions ({'accepted' if ok else 'not accepted'})"
-    )
 
 
 def realiased(run: _Run, r: int, accepted: list[dict], fitted: tuple, info: dict) -> tuple:

@@ -79,6 +79,7 @@ from .gap_verdict import (  # noqa: F401 (headline: the kind contract's; dropped
     dropped_text,
     gap_lines,
     headline,
+    not_accepted_rows,
     shrink_text,
 )
 
@@ -615,6 +616,7 @@ def summarise(scenario: Scenario, run: RunDir, notes: list[str]) -> None:
         "verdict": verdict_text(result),
         "dropped": dropped_text(result) if result.get("dropped_effects") else None,
         "dropped_effects": dropped_rows(result),  # their final fit, for the ranking's rows
+        "not_accepted": not_accepted_rows(result),  # a round's winner that widened the report's gap, and why
         "explained_share": result.get("explained_share"),
         "evaluations": result.get("evaluations"),  # the diagnosis's score evaluations, its fits' included
         "chain": result.get("chain"),

@@ -82,6 +82,26 @@ def dropped_rows(result: Mapping) -> list[dict]:
     ]
 
 
+def not_accepted_rows(result: Mapping) -> list[dict]:
+    """Each round's winner that lowered the search's score but widened the report's gap (gearlab.gap.record_lines):
+    round, name, the share of the score it removed and the gaps, for the verdict's line."""
+    return [
+        {"round": i["round"], "name": i["best"], "share": i["share_of_remaining"], **i["widens_report"]}
+        for i in result.get("rounds") or []
+        if i.get("widens_report")
+    ]
+
+
+def _not_accepted(summary: Mapping) -> list[str]:
+    from ..gap.record_lines import not_accepted_text  # here: it loads the diagnosis's scoring, which a verdict need not
+
+    return [
+        f"Round {w['round']}'s {w['name']} lowered the search's score by {_pct(w['share'])} but was not accepted: "
+        f"{not_accepted_text(w)}."
+        for w in summary.get("not_accepted") or []
+    ]
+
+
 def shrink_text(before: float, after: float) -> str:
     if before <= 0:
         return "n/a"
@@ -165,6 +185,7 @@ def gap_lines(summary: Mapping) -> list[str]:
                 f"Effects {summary['dropped']}: stand-ins for an effect outside the library; the simulator is "
                 "left uncorrected."
             )
+    lines += _not_accepted(summary)
     lines += _unchecked(summary)  # the verdict holds for the structure as far as it was checked
     lines += _level(summary)
     lines += _alone_versus_credited(summary)
