@@ -20,8 +20,9 @@ from .scoring import ACCEPT_CONFIDENCE, ACCEPT_REPLICATES, Scorer
 def widened(scorer: Scorer, current_X: np.ndarray, candidate_X: np.ndarray, seed: int) -> dict | None:
     """Where the score has the record's group: whether the candidate's rows (*candidate_X*) widen the gap on the
     revolutions' own features against the current source's (*current_X*), with ACCEPT_CONFIDENCE (a paired bootstrap
-    of the score without the record group, the rows resampled alike). Returns None where they do not, else the report's
-    gap of both (``report_now``, ``report_new``) and the record group's share of the current score."""
+    of the score without the record group, the rows resampled alike) and the report's gap on them is wider too. Returns
+    None where not, else the report's gap of both (``report_now``, ``report_new``) and the record group's share of the
+    current score."""
     if scorer.target_record is None:
         return None
     (_, Fc, Ft), (_, Fn, _) = scorer._leveled_features(current_X), scorer._leveled_features(candidate_X)
@@ -32,12 +33,15 @@ def widened(scorer: Scorer, current_X: np.ndarray, candidate_X: np.ndarray, seed
     rn = scorer._replicates(Fn, Ft, ACCEPT_REPLICATES, np.random.default_rng([seed, 4]))
     if not float(np.percentile(rn - rc, 100.0 * (1.0 - ACCEPT_CONFIDENCE))) > 0.0:
         return None
+    report_now, report_new = scorer.report_gap(current_X), scorer.report_gap(candidate_X)
+    if not report_new > report_now:  # the report itself finds it no worse: the search's score decides
+        return None
     total = scorer.score(current_X)
     return {
         "rows_now": now,
         "rows_new": new,
-        "report_now": scorer.report_gap(current_X),
-        "report_new": scorer.report_gap(candidate_X),
+        "report_now": report_now,
+        "report_new": report_new,
         "record_share": (total - now) / total if total > 0 else 0.0,
     }
 
