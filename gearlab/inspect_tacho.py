@@ -156,6 +156,16 @@ def marks_words(marks: int, ppr: int, table: str | None = None) -> str:
     return f"the tacho gives {marks} pulse(s) per revolution, not {ppr}? ({how})"
 
 
+def implied_marks(ppr: int, ratio: float | None) -> set[int]:
+    """The whole count of marks a turn, other than *ppr* and over 8 (marks_line tries those), that would bring the
+    speed read (*ratio* x the described) to the described one: {ppr x ratio} where that is within 5 % of a whole
+    count, else {}. An encoder's count typed a factor off (6 for 60, 360 for 36) lies beyond 8."""
+    if ratio is None or ratio <= 0:
+        return set()
+    marks = round(ppr * ratio)
+    return {marks} if marks > 8 and marks != ppr and abs(ppr * ratio / marks - 1) < 0.05 else set()
+
+
 def marks_line(check: dict, lines, ppr: int, bin_: float, ratio: float | None) -> list[str]:
     """A tacho read with the wrong marks per turn scales every order by f: the first mesh shows at f M and the input
     shaft's line at f, f = 1 / k when k marks a turn are read as one (a 29/86 mixer's 2-pulse keyphasor read as 1: mesh
@@ -172,8 +182,10 @@ def marks_line(check: dict, lines, ppr: int, bin_: float, ratio: float | None) -
     m = first["expected_order"]
     unexplained = [u["order"] for u in check["unexplained"] if "shaft_harmonic" not in u]  # a clock's line: no mesh
     # any count of marks up to 8 (a 3-mark output tacho described with 2: every order at 2/3 of its own, 'the wheel
-    # on the output shaft shows 10.9 teeth'), the nearest the described count first
-    for marks in sorted((q for q in range(1, 9) if q != ppr), key=lambda q: (abs(math.log(q / ppr)), q)):
+    # on the output shaft shows 10.9 teeth'), the nearest the described count first; and the count the speed read
+    # implies, whatever its size (a 60-mark encoder typed as 6 read 10 x the described speed, every mesh at a tenth)
+    tried = {q for q in range(1, 9) if q != ppr} | implied_marks(ppr, ratio)
+    for marks in sorted(tried, key=lambda q: (abs(math.log(q / ppr)), q)):
         for f in (ppr / marks,):
             at_mesh, at_shaft = amp(f * m), amp(f)
             described = ratio is not None and abs(ratio * f - 1) < 0.05

@@ -1,0 +1,59 @@
+"""An outside user's look (issue 39, "How it will be checked"): a three-stage 22/71 + 27/86 + 34/107 reducer at
+60 Hz, the accelerometer (100 mV/g) on the output bearing and an encoder of 60 pulses a turn on the output shaft,
+recorded by a DAQ as MATLAB files (`Channel_1_Data` in volts, `Channel_3_Data` the encoder, `Sample_Rate`). The
+recordings are made here, small, by plain numpy (mesh harmonics with sidebands, no gearlab simulator)."""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.io
+from gearboxes import description, stage
+
+FS, F_IN, G = 10000.0, 60.0, 9.80665
+Z = ((22, 71), (27, 86), (34, 107))
+BOX = description(
+    stage(22, 71, module="2 mm", width="20 mm", bores=("25 mm", "40 mm")),
+    stage(27, 86, module="3 mm", width="30 mm", bores=("40 mm", "55 mm")),
+    stage(34, 107, module="4 mm", width="40 mm", bores=("55 mm", "80 mm")),
+    name="box3",
+    speed="3600 rpm",
+    load="800 N*m",
+    near="output",
+    tacho="output",
+    marks=60,
+)
+DAQ = ("--vibration", "Channel_1_Data", "--tacho", "Channel_3_Data", "--sensitivity", "100 mV/g")
+
+
+def _take(path, seconds=4.0, seed=1, gain=1.0):
+    """A .mat take: each stage's mesh (3 harmonics, both shafts' sidebands, the last stage strongest at the sensor),
+    noise, in volts at 100 mV/g (x *gain*), and the 60-mark encoder on the output shaft as a 0/5 V square wave."""
+    rng = np.random.default_rng(seed)
+    n = int(FS * seconds)
+    th_in = 2 * np.pi * F_IN * np.arange(n) / FS + rng.uniform(0, 2 * np.pi)
+    turns = np.cumprod([1.0] + [zp / zw for zp, zw in Z])
+    th = [th_in * k for k in turns]
+    a = sum(0.2 * np.cos(th[k] + k) for k in range(4))  # each shaft's run-out
+    for s, (zp, _) in enumerate(Z):
+        am = 1 + 0.08 * np.cos(th[s]) + 0.06 * np.cos(th[s + 1] + 1.1)
+        a = a + sum((0.75 + 0.75 * s) * ah * am * np.cos(h * zp * th[s] + s) for h, ah in ((1, 1), (2, 0.45), (3, 0.2)))
+    a = a + rng.normal(0, 0.3, n)
+    tacho = np.where(np.sin(60 * th[3]) > 0, 5.0, 0.0)
+    data = {"Channel_1_Data": (a / G * 0.1 * gain)[:, None], "Channel_3_Data": tacho[:, None]}
+    scipy.io.savemat(path, data | {"Sample_Rate": np.array([[FS]])})
+    return path
+
+
+def _inspect(cli, tmp_path, take, *extra):
+    (tmp_path / "box3.toml").write_text(BOX)
+    return cli("inspect", take, "--gearbox", tmp_path / "box3.toml", *DAQ, *extra)
+
+
+def test_an_encoder_read_with_a_tenth_of_its_marks_is_named(cli, tmp_path):
+    """The encoder's 60 marks a turn typed as 6: every order reads a tenth of its own (mesh 2.2 for 22) and the
+    speed 10 x the described. inspect said only 'stage 1: no line at mesh order 22 (a 22-tooth pinion)' for every
+    stage, as if the gears differed; it tried counts of marks up to 8 alone."""
+    code, out, err = _inspect(cli, tmp_path, _take(tmp_path / "t.mat"), "--pulses-per-rev", "6")
+    assert code == 0, err
+    assert "the tacho gives 60 pulse(s) per revolution, not 6?" in out, out[-3000:]
+    assert "no line at mesh order 22" not in out
