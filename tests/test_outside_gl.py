@@ -57,3 +57,18 @@ def test_an_encoder_read_with_a_tenth_of_its_marks_is_named(cli, tmp_path):
     assert code == 0, err
     assert "the tacho gives 60 pulse(s) per revolution, not 6?" in out, out[-3000:]
     assert "no line at mesh order 22" not in out
+
+
+def test_a_face_width_in_inches_by_mistake_is_refused(cli, tmp_path):
+    """'30 in' typed for the 30 mm face of stage 2 (762 mm on a 27-tooth pinion of 81 mm): validate said OK, and the
+    simulator would have meshed a 25 x stiffer stage. Refused in one line naming the stage, key and what is
+    expected; a face of 1.2 in (30.5 mm) is a face width, accepted."""
+    path = tmp_path / "box3.toml"
+    path.write_text(BOX.replace('face_width = "30 mm"', 'face_width = "30 in"'))
+    code, out, err = cli("validate", path)
+    assert code == 2, out
+    assert err.count("\n") == 1 and "[[stages]] #2 key 'face_width': 762 mm" in err, err
+    assert "81 mm" in err and "expected" in err
+    path.write_text(BOX.replace('face_width = "30 mm"', 'face_width = "1.2 in"'))
+    code, out, err = cli("validate", path)
+    assert code == 0, err

@@ -21,7 +21,9 @@ h_a*, h_f* and d_a are each gear's where given, else the stage's.
   h_FfP* = h_f* - ρ_fP* (1 - sin α));
 * tip clearance: a_w - r_a of one gear - r_f of the other ≥ 0 (a shifted pair's tips may reach
   the mating root: the message names the tip diameter or addendum that would clear it);
-* contact ratio ε_α ≥ 1; pointed teeth (tip thickness s_a ≤ 0); a bore that cuts the root circle.
+* contact ratio ε_α ≥ 1; pointed teeth (tip thickness s_a ≤ 0); a bore that cuts the root circle;
+* face width: b ≤ 3 d1 (the pinion's reference diameter); a spur pinion's ψ_d = b / d1 is rarely over 1.5 (Niemann),
+  as a wider face bends and twists under load; a face 25.4 x too wide, inches typed for millimetres, lies far over.
 """
 
 from __future__ import annotations
@@ -36,6 +38,8 @@ from ..physics.geometry import inverse_involute, involute
 _UNDERCUT_SLACK = 0.02
 # A described centre distance agrees with a_w within this share of the module (or 10 µm).
 _CENTRE_TOLERANCE = 0.02
+# The widest face a stage may have, as a multiple of its pinion's reference diameter (module doc).
+_FACE_PER_PINION_DIAMETER = 3.0
 
 
 @dataclass(frozen=True)
@@ -133,6 +137,15 @@ def check_stage(stage) -> StageGeometry:
     z1, z2 = stage.pinion.z, stage.wheel.z
     gears = (("pinion", stage.pinion), ("wheel", stage.wheel))
     x_sum = stage.pinion.x + stage.wheel.x
+    for _, gear in gears:
+        if gear.face_width > _FACE_PER_PINION_DIAMETER * g.d[0]:
+            where = stage.where if gear.face_width == stage.face_width else gear.where
+            raise GearlabInputError(
+                f"{where} key 'face_width': {_mm(gear.face_width)} is {gear.face_width / g.d[0]:.3g} x the pinion's "
+                f"reference diameter d1 = {_mm(g.d[0])} (z1 = {z1}, m = {_mm(m)}); expected at most "
+                f"{_FACE_PER_PINION_DIAMETER:g} d1 = {_mm(_FACE_PER_PINION_DIAMETER * g.d[0])}, a spur pinion's face "
+                f"rarely over 1.5 d1 (inches for millimetres? '{gear.face_width / 0.0254:.4g} mm')"
+            )
     # Undercut, before the checks that an undercut tooth would fail in a less telling way.
     for _, gear in gears:
         h_rack = rack_addendum(stage, gear)
