@@ -72,3 +72,26 @@ def test_a_face_width_in_inches_by_mistake_is_refused(cli, tmp_path):
     path.write_text(BOX.replace('face_width = "30 mm"', 'face_width = "1.2 in"'))
     code, out, err = cli("validate", path)
     assert code == 0, err
+
+
+def test_a_history_read_by_a_60_mark_output_encoder_is_aligned_at_any_of_its_605880_marks(tmp_path):
+    """An input angle read off this box's 60-mark output encoder is known to 1/605880 of a turn (TachoShaft.marks):
+    a detection run's structure check aligned each history take to the first by trying every mark in a Python loop
+    (data.textzip.align_to), minutes a take before any simulation. Every mark is tried at once now; the mark found
+    is the one the take was turned by."""
+    from gearlab.data.textzip import align_to
+    from gearlab.gearbox import load_gearbox
+    from gearlab.gearbox.orders import TachoShaft
+
+    (tmp_path / "box3.toml").write_text(BOX)
+    marks = TachoShaft.of(load_gearbox(tmp_path / "box3.toml"), "output", "[sensor]").marks(60)
+    assert marks == 605880
+    rng = np.random.default_rng(3)
+    spectrum = np.fft.rfft(rng.normal(size=1024))
+    spectrum[-1] = 0.0  # band-limited: a shift of a fraction of a point is exact
+    reference, k = np.fft.irfft(spectrum, n=1024), np.arange(513)
+    for m0 in (0, 1, 302940, 605879, 123457):
+        late = np.fft.irfft(np.fft.rfft(reference) * np.exp(-2j * np.pi * k * m0 / marks), n=1024)
+        m, turned = align_to(reference, np.stack([late, late]), marks)
+        assert m == m0
+        assert np.allclose(turned, reference, atol=1e-9)
