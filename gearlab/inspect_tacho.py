@@ -166,6 +166,22 @@ def implied_marks(ppr: int, ratio: float | None) -> set[int]:
     return {marks} if marks > 8 and marks != ppr and abs(ppr * ratio / marks - 1) < 0.05 else set()
 
 
+def speed_marks_line(speed: float, described: float | None, ppr: int | None, where: str) -> str | None:
+    """The one line of a tacho whose *speed* read is a whole count of marks off the *described* speed (a 60-mark
+    encoder typed as 6: 600 Hz read for 60): the gap's refusal of a record too coarse for the mesh at that speed
+    said "[target] key 'fs'" instead. *where*: the scenario's location of pulses_per_rev. None where no count fits
+    or the speed is within 25 % of the described (slip, another load)."""
+    if not described or not ppr or 0.8 <= speed / described <= 1.25:
+        return None
+    marks = next(iter(implied_marks(ppr, speed / described) | {round(ppr * speed / described)}))
+    if marks < 1 or marks == ppr or abs(ppr * speed / described / marks - 1) >= 0.05:
+        return None
+    return (
+        f"{where}: the tacho reads the shaft at {speed:.4g} Hz, {speed / described:.3g} x the described "
+        f"{described:.4g} Hz: {marks_words(marks, ppr, '[target]')}"
+    )
+
+
 def marks_line(check: dict, lines, ppr: int, bin_: float, ratio: float | None) -> list[str]:
     """A tacho read with the wrong marks per turn scales every order by f: the first mesh shows at f M and the input
     shaft's line at f, f = 1 / k when k marks a turn are read as one (a 29/86 mixer's 2-pulse keyphasor read as 1: mesh

@@ -95,3 +95,22 @@ def test_a_history_read_by_a_60_mark_output_encoder_is_aligned_at_any_of_its_605
         m, turned = align_to(reference, np.stack([late, late]), marks)
         assert m == m0
         assert np.allclose(turned, reference, atol=1e-9)
+
+
+def test_a_gap_run_whose_encoder_marks_are_typed_a_factor_off_names_pulses_per_rev_not_fs(cli, tmp_path):
+    """[target] pulses_per_rev = 6 for the 60-mark encoder: the gap run read the shaft at 600 Hz and stopped with
+    "[target] key 'fs': sampling rate too low for the mesh harmonics", sending the user to the sampling rate. The
+    speed read 10 x the described names the marks."""
+    _take(tmp_path / "h1.mat", seconds=2.0)
+    (tmp_path / "box3.toml").write_text(BOX)
+    files = '[{ file = "h1.mat", role = "history", label = "healthy" }]'
+    (tmp_path / "gap.toml").write_text(
+        '[scenario]\nname = "g"\nkind = "gap"\n[source]\ngearbox = "box3.toml"\n[target]\n'
+        'vibration = "Channel_1_Data"\ntacho = "Channel_3_Data"\nsensitivity = "100 mV/g"\npulses_per_rev = 6\n'
+        f"files = {files}\n[accuracy]\nenabled = false\n"
+    )
+    code, out, err = cli("run", tmp_path / "gap.toml", "--quick")
+    assert code == 2, out[-2000:]
+    line = err.strip().splitlines()[-1]
+    assert "[target] key 'pulses_per_rev'" in line and "60 pulse(s) per revolution, not 6?" in line, line
+    assert "key 'fs'" not in line
