@@ -7,9 +7,10 @@ called, and a synchronous fault is named as before."""
 from __future__ import annotations
 
 import dataclasses
+import re
 
 import pytest
-from jittered_strikes import BOX, Strike, take
+from jittered_strikes import BOX, RING_ORDERS, Strike, take
 
 from gearlab.data import which_gear as W
 from gearlab.gearbox import order_table, resolve_gearbox
@@ -19,6 +20,7 @@ from gearlab.signals import localise as L
 from gearlab.signals import which_template as T
 
 PINION, WHEEL = "input pinion 39T (stage 1)", "output gear 61T (stage 1)"
+SEED_WEAK = 12  # a take whose weak output-gear strike the whole residual's envelope left unnamed
 
 
 @pytest.fixture(scope="module")
@@ -61,10 +63,43 @@ def test_healthy_takes_are_not_called_in_the_envelope(box):
 def test_the_envelope_s_history_is_saved_and_restored_with_the_averages(box):
     table, hist = box
     back = E.restored({**hist.state(), **E.state(hist.envelope)}, table)
+    assert len(back.histories) == len(E.bands(1.0)) > 1
     t = W.Take(*take(11, Strike("input", 0.3, 0.5)))
     again = W.which_gear(t, dataclasses.replace(hist, envelope=back), table, None)
     assert again == W.which_gear(t, hist, table, None)
     assert E.restored(hist.state(), table) is None  # a run stored before the envelope was read: the averages alone
+
+
+def test_a_run_saved_before_the_bands_were_read_reads_the_whole_residual_as_then(box):
+    """A run saved its envelope's history of the whole residual alone, 'envelope_' keys and no bands: restored, every
+    take is read in the whole residual's envelope against it, as the run read its own."""
+    table, hist = box
+    whole = hist.envelope.histories[0]
+    then = E.restored({**hist.state(), **{f"envelope_{k}": v for k, v in whole.state().items()}}, table)
+    assert len(then.histories) == 1 and then.candidates.tolist() == [[0.0, float("inf")]]
+    t = W.Take(*take(11, Strike("input", 0.3, 0.5)))
+    found = W.which_gear(t, dataclasses.replace(hist, envelope=then), table, None)
+    assert "demodulated in the whole residual" in found["method"], found["method"]
+    # the whole residual's envelope localised as before the bands: signals.localise against its own history
+    alone = L.localise(E.envelope(t.revolutions, table), whole, table, t.first % int(table.train_period))
+    ev = {s["shaft"]: s["z"] for s in found["shafts"]}
+    assert ev == {e.shaft: e.z for e in alone.ranking}
+    assert found["named"] == PINION, found["summary"]
+
+
+def test_a_weak_output_gear_strike_is_named_in_the_band_where_its_ring_is_most_impulsive(box):
+    """An output-gear strike at 0.3 of the mesh amplitude rings in a few orders about 120.9 under a residual of about
+    300 orders: the whole residual's envelope buries it (z under its threshold), the band chosen by the take's
+    spectral kurtosis holds the ring and names the output gear."""
+    table, hist = box
+    t = W.Take(*take(SEED_WEAK, Strike("output", 0.55, 0.3)))
+    whole = E.Bank(hist.envelope.candidates[:1], hist.envelope.histories[:1], hist.envelope.kurtosis[:1])
+    before = W.which_gear(t, dataclasses.replace(hist, envelope=whole), table, None)
+    assert before["named"] is None, before["summary"]
+    found = W.which_gear(t, hist, table, None)
+    assert found["named"] == WHEEL and found["seen"] == "envelope", found["summary"]
+    lo, hi = (float(v) for v in re.search(r"input orders ([\d.]+)-([\d.]+)", found["method"]).groups())
+    assert lo < RING_ORDERS < hi and hi - lo < 100, found["method"]
 
 
 def test_a_synchronous_fault_is_named_as_before(box):

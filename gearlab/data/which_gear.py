@@ -78,8 +78,9 @@ def history_of(
     options = {"first_revolutions": [t.first % period for t in takes], "marks": marks, "tacho": tacho or ""}
     options |= {"pulses": pulses, "free": tacho == ""}
     hist = L.history(records, table, max_order=band(takes) if max_order is None else max_order, **options)
+    top = band(takes) if all(t.fs and t.speed_hz for t in takes) else max_order  # the demodulation bands' span
     try:  # the takes' envelopes: a strike whose ring's phase wanders, which every synchronous average cancels
-        return dataclasses.replace(hist, envelope=E.history(records, table, **options))
+        return dataclasses.replace(hist, envelope=E.history(records, table, top=top, **options))
     except GearlabInputError:  # too short for it, or no band of it holds every shaft's orders: the averages alone
         return hist
 

@@ -18,6 +18,15 @@ flagged so is named with its gear where it carries one; a shaft of two gears is 
 width follows the ring's decay, not the tooth's pitch: signals.which_template's rules do not apply). The tooth is
 the envelope peak's angle on the shaft (signals.localise.tooth_index), later than the strike by the ring's decay.
 
+The band. A weak ring lies in a few orders about its resonance (its half-power width twice the damping ratio times
+its frequency), under a residual of every order the record holds: over the whole residual the noise's envelope buries
+it. The envelope is demodulated in one band of a fixed set (bands(): the whole residual and the levels of a binary
+tree over the orders the history holds, each level's bands overlapping by half), the one where the take is most
+impulsive beyond its history: the band's spectral kurtosis (the kurtogram's, Antoni 2006-2007: of the band's complex
+envelope c, mean |c|⁴ / (mean |c|²)² − 2, nil for Gaussian noise, positive for transients) less the history takes'
+largest in it. The band is chosen from the take and the history alone, and the history's envelopes are read in
+every band (Bank: one signals.localise history each), so the take's z is against its band's history, like for like.
+
 data.which_gear reads it where the synchronous averages name nothing (and read no other shaft near its threshold:
 elsewhere): a synchronous fault is named as before.
 
@@ -27,13 +36,14 @@ Everything is numpy: no torch, nothing from the layers above.
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 
 from ..errors import GearlabInputError
 from . import localise as L
 from . import nonsync as NS
-from .fft import analytic, rfft
+from .fft import fft, ifft, rfft
 
 POINTS = 256  # envelope samples per input revolution (orders up to 128: past ORDERS)
 ORDERS = (0.5, 24.0)  # input orders of the envelope read: a strike's envelope lies at its shaft's first orders
@@ -50,33 +60,110 @@ FALSE_ALARM = 1e-4
 # a healthy shaft's average passes it about one take in ten: the jittered 39/61 strikes of tests/jittered_strikes.py
 # named 14 -> 10 of 20 at 0.3 of the mesh amplitude; at 0.8 none lost, dev seed 55)
 OTHER_SHARE = 0.8
+LEVELS = 4  # levels of the binary tree of demodulation bands (bands())
 SEEN = "seen in the envelope of the record less every shaft's synchronous average"
 
 
-def envelope(revolutions: np.ndarray, table) -> np.ndarray:
-    """The squared envelope (R', POINTS) over its mean of the record *revolutions* (R, points: consecutive input
-    revolutions) less every shaft's synchronous average (nonsync.residual: R' <= R whole revolutions)."""
+def bands(top: float) -> np.ndarray:
+    """The candidate demodulation bands (n, 2), input orders [lo, hi): row 0 the whole residual, then each level
+    k = 1 .. LEVELS of the binary tree over orders 0 .. *top* (the highest every history take holds), bands top / 2^k
+    wide, each level's bands overlapping by half (a resonance on one band's edge lies inside another's)."""
+    out = [(0.0, np.inf)]
+    for k in range(1, LEVELS + 1):
+        width = top / 2**k
+        out += [(j * width / 2, j * width / 2 + width) for j in range(2 ** (k + 1) - 1)]
+    return np.asarray(out)
+
+
+def _spectrum(revolutions: np.ndarray, table) -> tuple[np.ndarray, int, int]:
+    """(the full spectrum of the record *revolutions* less every shaft's synchronous average, its revolutions, the
+    points of each)."""
     revs = np.asarray(revolutions, dtype=np.float64)
     r = NS.residual(revs, table)
-    e = np.abs(analytic(r)) ** 2
-    if not e.mean() > 0:
+    if not np.any(r):
         raise GearlabInputError("envelope: no residual left (the record is constant); expected a signal")
-    count = r.size // revs.shape[1]
+    return fft(r), r.size // revs.shape[1], revs.shape[1]
+
+
+def _band(X: np.ndarray, count: int, points: int, band) -> tuple[np.ndarray, float]:
+    """(the squared envelope (count, POINTS) over its mean of the residual of spectrum *X* in *band* (input orders
+    [lo, hi); hi past the spectrum's half: the whole residual), its spectral kurtosis in sds of its estimate on
+    Gaussian noise: 2 / √N over the band's N independent bins, 2 (Σ P)² / Σ P² of its bins' powers P (a periodogram's
+    P spread as an exponential's: N where the band is flat, fewer where its power lies in a few bins))."""
+    lo, hi = band
+    n = X.size
+    k = np.arange(n)
+    sel = (k >= max(math.ceil(lo * count), 1)) & (k < hi * count) & (k < n / 2)
+    if hi - lo < POINTS / 2:  # the band shifted down to orders 0 .. hi - lo: its envelope is whole at POINTS a turn
+        H = np.zeros(count * POINTS, dtype=complex)
+        H[: int(sel.sum())] = X[sel]
+        e = np.abs(ifft(H)) ** 2
+    else:
+        h = sel * 2.0
+        h[0] = 1.0 if lo <= 0 else 0.0
+        if n % 2 == 0 and hi * count > n / 2:
+            h[n // 2] = 1.0
+        e = np.abs(ifft(X * h)) ** 2
+    if not e.mean() > 0:
+        raise GearlabInputError(f"envelope: no residual in input orders {lo:g}-{hi:g}; expected a signal")
+    p = np.abs(X[sel]) ** 2
+    kurt = (np.mean(e**2) / e.mean() ** 2 - 2) * np.sqrt(2 * p.sum() ** 2 / (p**2).sum()) / 2
+    if hi - lo < POINTS / 2:
+        return (e / e.mean()).reshape(count, POINTS), float(kurt)
     E = rfft(e / e.mean())[: count * POINTS // 2 + 1]  # low-passed to POINTS / 2 orders
-    return np.fft.irfft(E, n=count * POINTS).reshape(count, POINTS) * (POINTS / revs.shape[1])
+    return np.fft.irfft(E, n=count * POINTS).reshape(count, POINTS) * (POINTS / points), float(kurt)
 
 
-def history(records: list[np.ndarray], table, **options) -> L.History:
-    """The healthy history of the records' envelopes (signals.localise.history at ORDERS; *options*: its first
-    revolutions, marks, tacho, pulses, free)."""
+def envelope(revolutions: np.ndarray, table, band=(0.0, np.inf)) -> np.ndarray:
+    """The squared envelope (R', POINTS) over its mean of the record *revolutions* (R, points: consecutive input
+    revolutions) less every shaft's synchronous average (nonsync.residual: R' <= R whole revolutions), in *band*
+    (input orders [lo, hi); default: the whole residual)."""
+    return _band(*_spectrum(revolutions, table), band)[0]
+
+
+def kurtosis(revolutions: np.ndarray, table, candidates: np.ndarray) -> np.ndarray:
+    """The spectral kurtosis of the residual of *revolutions* in each band of *candidates* (bands())."""
+    spec = _spectrum(revolutions, table)
+    return np.array([_band(*spec, b)[1] for b in candidates])
+
+
+@dataclasses.dataclass(frozen=True)
+class Bank:
+    """The healthy history's envelopes in each candidate band (bands(): *candidates*), *histories* one per band, and
+    *kurtosis*: the history takes' mean spectral kurtosis in each (in sds of its estimate on noise: _band)."""
+
+    candidates: np.ndarray
+    histories: tuple[L.History, ...]
+    kurtosis: np.ndarray
+
+    def chosen(self, kurt: np.ndarray) -> int:
+        """The band a take of spectral kurtosis *kurt* (one per band, as *kurtosis*) is read in: where it exceeds the
+        history's most."""
+        return int(np.argmax(np.asarray(kurt) - self.kurtosis))
+
+
+def history(records: list[np.ndarray], table, top: float | None = None, **options) -> Bank:
+    """The healthy history of the records' envelopes in each candidate band (bands(*top*); default: 0.45 of the
+    points a revolution), each band's as signals.localise.history reads it at ORDERS; *options*: its first
+    revolutions, marks, tacho, pulses, free."""
     lo, hi = ORDERS
-    read = [envelope(r, table) for r in records]
-    return L.history(read, table, min_order=lo, max_order=hi, band=BAND, false_alarm=FALSE_ALARM, **options)
+    candidates = bands(0.45 * np.shape(records[0])[-1] if top is None else top)
+    specs = [_spectrum(r, table) for r in records]
+    read = [[_band(*s, b) for s in specs] for b in candidates]
+    hists = tuple(
+        L.history([e for e, _ in rs], table, min_order=lo, max_order=hi, band=BAND, false_alarm=FALSE_ALARM, **options)
+        for rs in read
+    )
+    return Bank(candidates, hists, np.array([np.mean([k for _, k in rs]) for rs in read]))
 
 
-def localise(revolutions: np.ndarray, hist: L.History, table, first_revolution: int = 0) -> L.Localisation:
-    """The envelope of *revolutions* localised against *hist* (history()): a shaft of two gears named as the shaft."""
-    found = L.localise(envelope(revolutions, table), hist, table, first_revolution)
+def localise(revolutions: np.ndarray, bank: Bank, table, first_revolution: int = 0) -> L.Localisation:
+    """The envelope of *revolutions* in the band bank.chosen() localised against that band's history (history()): a
+    shaft of two gears named as the shaft."""
+    spec = _spectrum(revolutions, table)
+    read = [_band(*spec, b) for b in bank.candidates]
+    i = bank.chosen([k for _, k in read])
+    found = L.localise(read[i][0], bank.histories[i], table, first_revolution)
     gears = L.gears_of(table)
     ranking = tuple(
         e if len(e.gears) == 1 else dataclasses.replace(e, gear=L.shaft_label(e.shaft, gears[e.shaft]), which=None)
@@ -85,7 +172,10 @@ def localise(revolutions: np.ndarray, hist: L.History, table, first_revolution: 
     ranking = tuple(dataclasses.replace(e, stage_evidence={}) for e in ranking)
     top = next((e for e in ranking if e.flagged), None)
     named, shaft = (None, None) if top is None else (top.gear, top.shaft)
-    return L.Localisation(f"{SEEN}: {found.method}", ranking, named, shaft)
+    lo, hi = bank.candidates[i]
+    where = "the whole residual" if i == 0 else f"input orders {lo:.4g}-{hi:.4g}"
+    band = f"demodulated in {where} (spectral kurtosis {read[i][1]:.3g} sd, the history's {bank.kurtosis[i]:.3g})"
+    return L.Localisation(f"{SEEN}, {band}: {found.method}", ranking, named, shaft)
 
 
 def elsewhere(synchronous: L.Localisation, shaft: str) -> bool:
@@ -104,12 +194,29 @@ def described(found: L.Localisation, synchronous: str) -> dict:
     return out | {"seen": "envelope"}
 
 
-def state(hist: L.History | None) -> dict:
-    """The arrays (History.state) to save the envelope's history *hist* with, each key prefixed; {} for None."""
-    return {} if hist is None else {f"envelope_{k}": v for k, v in hist.state().items()}
+def state(bank: Bank | None) -> dict:
+    """The arrays (History.state) to save the envelope's bank *bank* with: the whole residual's history prefixed
+    'envelope_' (as a run saved before the bands were read holds it), band i's 'envelope{i}_'; {} for None."""
+    if bank is None:
+        return {}
+    out = {"envelope_bands": bank.candidates, "envelope_kurtosis": bank.kurtosis}
+    for i, h in enumerate(bank.histories):
+        prefix = f"envelope{i}_" if i else "envelope_"
+        out |= {prefix + k: v for k, v in h.state().items()}
+    return out
 
 
-def restored(arrays: dict, table) -> L.History | None:
-    """The envelope's history state() saved in *arrays*; None where none was (a run stored before it was read)."""
-    mine = {k.removeprefix("envelope_"): v for k, v in arrays.items() if k.startswith("envelope_")}
-    return L.History.restored(mine, table) if mine else None
+def restored(arrays: dict, table) -> Bank | None:
+    """The envelope's bank state() saved in *arrays*; None where none was (a run stored before it was read); the
+    whole residual's alone where no band was (a run stored before the bands were read: read as it was then)."""
+    whole = {k.removeprefix("envelope_"): v for k, v in arrays.items() if k.startswith("envelope_")}
+    if not whole:
+        return None
+    if "envelope_bands" not in arrays:
+        return Bank(bands(0.0)[:1], (L.History.restored(whole, table),), np.zeros(1))
+    candidates = np.asarray(arrays["envelope_bands"], dtype=np.float64)
+    hists = [L.History.restored(whole, table)]
+    for i in range(1, len(candidates)):
+        mine = {k.removeprefix(f"envelope{i}_"): v for k, v in arrays.items() if k.startswith(f"envelope{i}_")}
+        hists.append(L.History.restored(mine, table))
+    return Bank(candidates, tuple(hists), np.asarray(arrays["envelope_kurtosis"], dtype=np.float64))

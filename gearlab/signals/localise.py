@@ -603,7 +603,7 @@ class History:
     tacho: str = ""  # the shaft the tacho reads ("": none, or not said)
     pulses: int = 1  # its marks per turn
     free: bool = False  # no tacho: a take's zero is its first sample, no gear's tooth is fixed across takes
-    envelope: History | None = None  # the same takes' envelopes (signals.envelope_sync), where read
+    envelope: object = None  # the same takes' envelopes in each band (signals.envelope_sync.Bank), where read
 
     def state(self) -> dict[str, np.ndarray]:
         """Plain arrays (np.savez) from which :meth:`restored` remakes this history, records unread."""
