@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import re
 
+import numpy as np
 import pytest
 from jittered_strikes import BOX, RING_ORDERS, Strike, take
 
@@ -62,7 +63,9 @@ def test_healthy_takes_are_not_called_in_the_envelope(box):
 
 def test_the_envelope_s_history_is_saved_and_restored_with_the_averages(box):
     table, hist = box
-    back = E.restored({**hist.state(), **E.state(hist.envelope)}, table)
+    saved = E.state(hist.envelope)  # every band's history, those no take was read in too
+    assert all(f"envelope{i}_thresholds" in saved for i in range(1, len(E.bands(1.0)))), sorted(saved)
+    back = E.restored({**hist.state(), **saved}, table)
     assert len(back.histories) == len(E.bands(1.0)) > 1
     t = W.Take(*take(11, Strike("input", 0.3, 0.5)))
     again = W.which_gear(t, dataclasses.replace(hist, envelope=back), table, None)
@@ -100,6 +103,27 @@ def test_a_weak_output_gear_strike_is_named_in_the_band_where_its_ring_is_most_i
     assert found["named"] == WHEEL and found["seen"] == "envelope", found["summary"]
     lo, hi = (float(v) for v in re.search(r"input orders ([\d.]+)-([\d.]+)", found["method"]).groups())
     assert lo < RING_ORDERS < hi and hi - lo < 100, found["method"]
+
+
+def test_a_take_s_kurtosis_is_its_envelope_s_in_every_band_and_its_band_s_history_alone_is_read(box, monkeypatch):
+    """A take's spectral kurtosis, read in every band at the fewest points that hold each band's envelope, is the
+    kurtosis of its envelope at POINTS a turn (or at the record's length) to round-off; reading the take reads the
+    history of its chosen band alone (the history saved for `gearlab score` holds every band's:
+    test_the_envelope_s_history_is_saved_and_restored_with_the_averages)."""
+    table, _ = box
+    t = W.Take(*take(SEED_WEAK, Strike("output", 0.55, 0.3)))
+    spec = E._spectrum(t.revolutions, table)
+    candidates = E.bands(W.band([t]))
+    each = [E._band(*spec, b)[1] for b in candidates]
+    assert max(abs(k) for k in each) > 1.0  # the strike's ring: far from nil in some band
+    np.testing.assert_allclose(E.kurtosis(t.revolutions, table, candidates), each, rtol=1e-9, atol=1e-12)
+    read, real = [], L.history
+    monkeypatch.setattr(L, "history", lambda *a, **k: read.append(1) or real(*a, **k))
+    hist = W.history_of([W.Take(*take(seed)) for seed in (1, 2)], table)
+    assert len(read) == 2  # the synchronous averages' history and the whole residual's envelope's
+    found = W.which_gear(t, hist, table, None)
+    assert found["seen"] == "envelope" and "input orders" in found["method"], found["summary"]
+    assert len(read) == 3  # the band the take is read in
 
 
 def test_a_synchronous_fault_is_named_as_before(box):

@@ -26,6 +26,9 @@ impulsive beyond its history: the band's spectral kurtosis (the kurtogram's, Ant
 envelope c, mean |c|⁴ / (mean |c|²)² − 2, nil for Gaussian noise, positive for transients) less the history takes'
 largest in it. The band is chosen from the take and the history alone, and the history's envelopes are read in
 every band (Bank: one signals.localise history each), so the take's z is against its band's history, like for like.
+A take's kurtosis is read in every band, each band's squared envelope at the fewest points that hold it whole (its
+mean and its square's are there what they are at POINTS a turn, to round-off), its envelope in its band alone; a
+band's history is read on its first use (a take's band; every band where the history is saved for `gearlab score`).
 
 data.which_gear reads it where the synchronous averages name nothing (and read no other shaft near its threshold:
 elsewhere): a synchronous fault is named as before.
@@ -37,6 +40,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import threading
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -85,33 +90,80 @@ def _spectrum(revolutions: np.ndarray, table) -> tuple[np.ndarray, int, int]:
     return fft(r), r.size // revs.shape[1], revs.shape[1]
 
 
+def _bins(n: int, count: int, band) -> tuple[int, int, bool]:
+    """(first, stop, wide) of *band* (input orders [lo, hi)) in a spectrum of n bins and *count* revolutions: its bins
+    first … stop - 1, none at 0 nor past the half; wide: demodulated at the whole record's length (_band)."""
+    lo, hi = band
+    first = max(math.ceil(lo * count), 1)
+    stop = min(math.ceil(hi * count) if np.isfinite(hi) else n, math.ceil(n / 2))
+    return first, max(stop, first), not hi - lo < POINTS / 2
+
+
 def _band(X: np.ndarray, count: int, points: int, band) -> tuple[np.ndarray, float]:
     """(the squared envelope (count, POINTS) over its mean of the residual of spectrum *X* in *band* (input orders
-    [lo, hi); hi past the spectrum's half: the whole residual), its spectral kurtosis in sds of its estimate on
-    Gaussian noise: 2 / √N over the band's N independent bins, 2 (Σ P)² / Σ P² of its bins' powers P (a periodogram's
-    P spread as an exponential's: N where the band is flat, fewer where its power lies in a few bins))."""
+    [lo, hi); hi past the spectrum's half: the whole residual), its spectral kurtosis (_kurtosis))."""
     lo, hi = band
     n = X.size
-    k = np.arange(n)
-    sel = (k >= max(math.ceil(lo * count), 1)) & (k < hi * count) & (k < n / 2)
-    if hi - lo < POINTS / 2:  # the band shifted down to orders 0 .. hi - lo: its envelope is whole at POINTS a turn
+    first, stop, wide = _bins(n, count, band)
+    if not wide:  # the band shifted down to orders 0 .. hi - lo: its envelope is whole at POINTS a turn
         H = np.zeros(count * POINTS, dtype=complex)
-        H[: int(sel.sum())] = X[sel]
+        H[: stop - first] = X[first:stop]
         e = np.abs(ifft(H)) ** 2
     else:
-        h = sel * 2.0
+        h = np.zeros(n)
+        h[first:stop] = 2.0
         h[0] = 1.0 if lo <= 0 else 0.0
         if n % 2 == 0 and hi * count > n / 2:
             h[n // 2] = 1.0
         e = np.abs(ifft(X * h)) ** 2
     if not e.mean() > 0:
         raise GearlabInputError(f"envelope: no residual in input orders {lo:g}-{hi:g}; expected a signal")
-    p = np.abs(X[sel]) ** 2
-    kurt = (np.mean(e**2) / e.mean() ** 2 - 2) * np.sqrt(2 * p.sum() ** 2 / (p**2).sum()) / 2
-    if hi - lo < POINTS / 2:
-        return (e / e.mean()).reshape(count, POINTS), float(kurt)
+    kurt = _normalised(np.mean(e**2) / e.mean() ** 2 - 2, X[first:stop])
+    if not wide:
+        return (e / e.mean()).reshape(count, POINTS), kurt
     E = rfft(e / e.mean())[: count * POINTS // 2 + 1]  # low-passed to POINTS / 2 orders
-    return np.fft.irfft(E, n=count * POINTS).reshape(count, POINTS) * (POINTS / points), float(kurt)
+    return np.fft.irfft(E, n=count * POINTS).reshape(count, POINTS) * (POINTS / points), kurt
+
+
+def _normalised(kurt: float, bins: np.ndarray) -> float:
+    """The spectral kurtosis *kurt* of a band of spectrum *bins* in sds of its estimate on Gaussian noise: 2 / √N over
+    the band's N independent bins, 2 (Σ P)² / Σ P² of its bins' powers P (a periodogram's P spread as an
+    exponential's: N where the band is flat, fewer where its power lies in a few bins)."""
+    p = np.abs(bins) ** 2
+    return float(kurt * np.sqrt(2 * p.sum() ** 2 / (p**2).sum()) / 2)
+
+
+def _kurtosis(X: np.ndarray, count: int, points: int, candidates: np.ndarray) -> np.ndarray:
+    """_band's spectral kurtosis of the residual of spectrum *X* in each band of *candidates*, its squared envelope
+    read at the fewest points that hold it whole (twice the band's bins: the mean of the envelope and of its square
+    are there what they are at POINTS a turn, or at the record's length, to round-off), the bands of one length in one
+    transform: a take reads its kurtosis in every band, its envelope in one."""
+    from scipy.fft import next_fast_len
+
+    n = X.size
+    out = np.empty(len(candidates))
+    rows: dict[int, list] = {}
+    for i, band in enumerate(candidates):
+        first, stop, wide = _bins(n, count, band)
+        lo, hi = band
+        if wide and n % 2 == 0 and hi * count > n / 2:  # the half's bin in it (the whole residual): as _band
+            out[i] = _band(X, count, points, band)[1]
+            continue
+        # a wide band from order 0 holds the DC at half the weight of its other bins (_band's analytic signal)
+        held = np.concatenate([X[:1], 2 * X[first:stop]]) if wide and lo <= 0 else X[first:stop]
+        rows.setdefault(next_fast_len(2 * held.size, real=False), []).append((i, first, stop, held))
+    for size, group in rows.items():
+        H = np.zeros((len(group), size), dtype=complex)
+        for r, (_, _, _, held) in enumerate(group):
+            H[r, : held.size] = held
+        e = np.abs(np.fft.ifft(H, axis=-1)) ** 2
+        mean = e.mean(axis=-1)
+        for r, (i, first, stop, _) in enumerate(group):
+            if not mean[r] > 0:
+                lo, hi = candidates[i]
+                raise GearlabInputError(f"envelope: no residual in input orders {lo:g}-{hi:g}; expected a signal")
+            out[i] = _normalised(np.mean(e[r] ** 2) / mean[r] ** 2 - 2, X[first:stop])
+    return out
 
 
 def envelope(revolutions: np.ndarray, table, band=(0.0, np.inf)) -> np.ndarray:
@@ -123,17 +175,39 @@ def envelope(revolutions: np.ndarray, table, band=(0.0, np.inf)) -> np.ndarray:
 
 def kurtosis(revolutions: np.ndarray, table, candidates: np.ndarray) -> np.ndarray:
     """The spectral kurtosis of the residual of *revolutions* in each band of *candidates* (bands())."""
-    spec = _spectrum(revolutions, table)
-    return np.array([_band(*spec, b)[1] for b in candidates])
+    return _kurtosis(*_spectrum(revolutions, table), candidates)
+
+
+class Histories(Sequence):
+    """A bank's band histories, each read on its first use (*read*: the histories of a list of band indices): a take
+    is read in one band, and a history read for `gearlab score` (state()) in all of them. Until then *read* holds what
+    they are read from (history(): the history takes' residual spectra, as long as the takes)."""
+
+    def __init__(self, count: int, read: Callable[[list[int]], list[L.History]]):
+        self._count, self._read, self._kept, self._lock = count, read, {}, threading.Lock()
+
+    def __len__(self) -> int:
+        return self._count
+
+    def __getitem__(self, i):
+        wanted = range(self._count)[i]
+        with self._lock:
+            missing = [j for j in (wanted if isinstance(i, slice) else [wanted]) if j not in self._kept]
+            if missing:
+                self._kept.update(zip(missing, self._read(missing)))
+                if len(self._kept) == self._count:  # every band read: what they were read from is let go
+                    self._read = None
+            return tuple(self._kept[j] for j in wanted) if isinstance(i, slice) else self._kept[wanted]
 
 
 @dataclasses.dataclass(frozen=True)
 class Bank:
-    """The healthy history's envelopes in each candidate band (bands(): *candidates*), *histories* one per band, and
-    *kurtosis*: the history takes' mean spectral kurtosis in each (in sds of its estimate on noise: _band)."""
+    """The healthy history's envelopes in each candidate band (bands(): *candidates*), *histories* one per band (a
+    sequence: Histories reads each on first use), and *kurtosis*: the history takes' mean spectral kurtosis in each
+    (in sds of its estimate on noise: _band)."""
 
     candidates: np.ndarray
-    histories: tuple[L.History, ...]
+    histories: Sequence[L.History]
     kurtosis: np.ndarray
 
     def chosen(self, kurt: np.ndarray) -> int:
@@ -144,26 +218,40 @@ class Bank:
 
 def history(records: list[np.ndarray], table, top: float | None = None, **options) -> Bank:
     """The healthy history of the records' envelopes in each candidate band (bands(*top*); default: 0.45 of the
-    points a revolution), each band's as signals.localise.history reads it at ORDERS; *options*: its first
-    revolutions, marks, tacho, pulses, free."""
+    points a revolution), each band's as signals.localise.history reads it at ORDERS, on its first use (the whole
+    residual's now: what cannot be read so says so here); *options*: its first revolutions, marks, tacho, pulses,
+    free."""
     lo, hi = ORDERS
     candidates = bands(0.45 * np.shape(records[0])[-1] if top is None else top)
     specs = [_spectrum(r, table) for r in records]
-    read = [[_band(*s, b) for s in specs] for b in candidates]
-    hists = tuple(
-        L.history([e for e, _ in rs], table, min_order=lo, max_order=hi, band=BAND, false_alarm=FALSE_ALARM, **options)
-        for rs in read
-    )
-    return Bank(candidates, hists, np.array([np.mean([k for _, k in rs]) for rs in read]))
+    kurt = np.mean([_kurtosis(*s, candidates) for s in specs], axis=0)
+
+    def read(indices: list[int]) -> list[L.History]:
+        return [
+            L.history(
+                [_band(*s, candidates[i])[0] for s in specs],
+                table,
+                min_order=lo,
+                max_order=hi,
+                band=BAND,
+                false_alarm=FALSE_ALARM,
+                **options,
+            )
+            for i in indices
+        ]
+
+    hists = Histories(len(candidates), read)
+    hists[0]  # noqa: B018 (read now: a record too short for it, or a layout of no band, raises here)
+    return Bank(candidates, hists, kurt)
 
 
 def localise(revolutions: np.ndarray, bank: Bank, table, first_revolution: int = 0) -> L.Localisation:
     """The envelope of *revolutions* in the band bank.chosen() localised against that band's history (history()): a
     shaft of two gears named as the shaft."""
     spec = _spectrum(revolutions, table)
-    read = [_band(*spec, b) for b in bank.candidates]
-    i = bank.chosen([k for _, k in read])
-    found = L.localise(read[i][0], bank.histories[i], table, first_revolution)
+    kurt = _kurtosis(*spec, bank.candidates)
+    i = bank.chosen(kurt)
+    found = L.localise(_band(*spec, bank.candidates[i])[0], bank.histories[i], table, first_revolution)
     gears = L.gears_of(table)
     ranking = tuple(
         e if len(e.gears) == 1 else dataclasses.replace(e, gear=L.shaft_label(e.shaft, gears[e.shaft]), which=None)
@@ -174,7 +262,7 @@ def localise(revolutions: np.ndarray, bank: Bank, table, first_revolution: int =
     named, shaft = (None, None) if top is None else (top.gear, top.shaft)
     lo, hi = bank.candidates[i]
     where = "the whole residual" if i == 0 else f"input orders {lo:.4g}-{hi:.4g}"
-    band = f"demodulated in {where} (spectral kurtosis {read[i][1]:.3g} sd, the history's {bank.kurtosis[i]:.3g})"
+    band = f"demodulated in {where} (spectral kurtosis {kurt[i]:.3g} sd, the history's {bank.kurtosis[i]:.3g})"
     return L.Localisation(f"{SEEN}, {band}: {found.method}", ranking, named, shaft)
 
 
@@ -200,7 +288,7 @@ def state(bank: Bank | None) -> dict:
     if bank is None:
         return {}
     out = {"envelope_bands": bank.candidates, "envelope_kurtosis": bank.kurtosis}
-    for i, h in enumerate(bank.histories):
+    for i, h in enumerate(bank.histories[:]):  # every band's: those not read yet are read now
         prefix = f"envelope{i}_" if i else "envelope_"
         out |= {prefix + k: v for k, v in h.state().items()}
     return out
@@ -208,15 +296,22 @@ def state(bank: Bank | None) -> dict:
 
 def restored(arrays: dict, table) -> Bank | None:
     """The envelope's bank state() saved in *arrays*; None where none was (a run stored before it was read); the
-    whole residual's alone where no band was (a run stored before the bands were read: read as it was then)."""
+    whole residual's alone where no band was (a run stored before the bands were read: read as it was then). Each
+    band's history is remade on its first use (the whole residual's now: one saved for another gearbox says so)."""
     whole = {k.removeprefix("envelope_"): v for k, v in arrays.items() if k.startswith("envelope_")}
     if not whole:
         return None
     if "envelope_bands" not in arrays:
         return Bank(bands(0.0)[:1], (L.History.restored(whole, table),), np.zeros(1))
     candidates = np.asarray(arrays["envelope_bands"], dtype=np.float64)
-    hists = [L.History.restored(whole, table)]
-    for i in range(1, len(candidates)):
-        mine = {k.removeprefix(f"envelope{i}_"): v for k, v in arrays.items() if k.startswith(f"envelope{i}_")}
-        hists.append(L.History.restored(mine, table))
-    return Bank(candidates, tuple(hists), np.asarray(arrays["envelope_kurtosis"], dtype=np.float64))
+
+    def read(indices: list[int]) -> list[L.History]:
+        prefixes = [f"envelope{i}_" if i else "envelope_" for i in indices]
+        return [
+            L.History.restored({k.removeprefix(p): v for k, v in arrays.items() if k.startswith(p)}, table)
+            for p in prefixes
+        ]
+
+    hists = Histories(len(candidates), read)
+    hists[0]  # noqa: B018 (remade now: a history saved for another gearbox says so here)
+    return Bank(candidates, hists, np.asarray(arrays["envelope_kurtosis"], dtype=np.float64))
