@@ -70,6 +70,7 @@ def test_the_envelope_s_history_is_saved_and_restored_with_the_averages(box):
     t = W.Take(*take(11, Strike("input", 0.3, 0.5)))
     again = W.which_gear(t, dataclasses.replace(hist, envelope=back), table, None)
     assert again == W.which_gear(t, hist, table, None)
+    np.testing.assert_array_equal(back.thresholds(), hist.envelope.thresholds())  # the selection's, restored as read
     assert E.restored(hist.state(), table) is None  # a run stored before the envelope was read: the averages alone
 
 
@@ -121,9 +122,12 @@ def test_a_take_s_kurtosis_is_its_envelope_s_in_every_band_and_its_band_s_histor
     monkeypatch.setattr(L, "history", lambda *a, **k: read.append(1) or real(*a, **k))
     hist = W.history_of([W.Take(*take(seed)) for seed in (1, 2)], table)
     assert len(read) == 2  # the synchronous averages' history and the whole residual's envelope's
+    quiet = W.which_gear(W.Take(*take(20)), hist, table, None)
+    assert quiet["named"] is None and len(read) == 3  # a healthy take: the band it is read in alone
     found = W.which_gear(t, hist, table, None)
     assert found["seen"] == "envelope" and "input orders" in found["method"], found["summary"]
-    assert len(read) == 3  # the band the take is read in
+    # over its band's threshold: read against every band's (envelope_sync.Bank.thresholds), each band's history once
+    assert E.SELECTED in found["method"] and len(read) == 1 + len(candidates), found["method"]
 
 
 def test_a_synchronous_fault_is_named_as_before(box):

@@ -84,6 +84,28 @@ def test_a_stage_2_wheel_fault_of_three_stages_is_named_on_its_shaft_not_the_slo
     assert found[None]["named"] is None, found[None]["summary"]
 
 
+def test_a_healthy_take_is_not_named_in_the_envelope_band_it_chose_of_many(tmp_path):
+    """The healthy take of the three-stage train above: its envelope is read in the band of 57 where it is most
+    impulsive, and there its input shaft's z (4.54) passed that band's threshold (the Gaussian floor 4.06): the band
+    is a selection, so the take is read against the largest threshold over every band (envelope_sync.Bank), and
+    nothing is named."""
+    from gearlab.signals import envelope_sync as E
+    from gearlab.signals import localise as L
+
+    teeth, options = ((21, 46), (27, 64), (23, 59)), {"fs": 12_800.0, "speed": 15.0, "seconds": 8.0}
+    table, hist, healthy = _healthy(tmp_path, teeth, bump=0.15, **options)
+    assert healthy["named"] is None, healthy["summary"]
+    revs, bank = take(teeth, None, 4, 0.014, bump=0.15, **options).revolutions, hist.envelope
+    i = bank.chosen(E.kurtosis(revs, table, bank.candidates))
+    alone = L.localise(E.envelope(revs, table, bank.candidates[i]), bank.histories[i], table, 0)
+    assert alone.named is not None, alone.summary()  # its band's own threshold: the selection alone lifts it over
+    found = E.localise(revs, bank, table, 0)
+    assert found.named is None, found.summary()
+    every = np.max([h.thresholds for h in bank.histories[:]], axis=0)
+    shafts = bank.histories[i].layout.shafts
+    assert [e.threshold for e in found.ranking] == [every[shafts.index(e.shaft)] for e in found.ranking]
+
+
 @pytest.mark.slow
 def test_the_soft_reducer_at_its_own_step_names_the_intermediate_shaft_not_the_input():
     """The 21/63 + 24/56 reducer on bearings 0.3 times as stiff, a chip on its 24T intermediate pinion,

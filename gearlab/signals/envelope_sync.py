@@ -26,9 +26,15 @@ impulsive beyond its history: the band's spectral kurtosis (the kurtogram's, Ant
 envelope c, mean |c|⁴ / (mean |c|²)² − 2, nil for Gaussian noise, positive for transients) less the history takes'
 largest in it. The band is chosen from the take and the history alone, and the history's envelopes are read in
 every band (Bank: one signals.localise history each), so the take's z is against its band's history, like for like.
+Its threshold is not its band's alone: the band is the one of many where the take is most impulsive, and a healthy
+take's z there is larger than one band's left-out takes read (a three-stage healthy take: 4.54 in its band, whose
+threshold was the Gaussian floor 4.06; the history takes, each choosing its band so, read at most 2.8 there, and at
+most 5.19 over every band). A shaft over its band's threshold is read against Bank.thresholds(): the largest over
+every band, a bound on the z of whichever band a healthy take chooses.
 A take's kurtosis is read in every band, each band's squared envelope at the fewest points that hold it whole (its
 mean and its square's are there what they are at POINTS a turn, to round-off), its envelope in its band alone; a
-band's history is read on its first use (a take's band; every band where the history is saved for `gearlab score`).
+band's history is read on its first use (a take's band; every band where a take passes its band's threshold, or the
+history is saved for `gearlab score`).
 
 data.which_gear reads it where the synchronous averages name nothing (and read no other shaft near its threshold:
 elsewhere): a synchronous fault is named as before.
@@ -66,6 +72,7 @@ FALSE_ALARM = 1e-4
 # named 14 -> 10 of 20 at 0.3 of the mesh amplitude; at 0.8 none lost, dev seed 55)
 OTHER_SHARE = 0.8
 LEVELS = 4  # levels of the binary tree of demodulation bands (bands())
+SELECTED = "the envelope's thresholds the largest over every band (the take's band is one chosen of many)"
 SEEN = "seen in the envelope of the record less every shaft's synchronous average"
 
 
@@ -215,6 +222,13 @@ class Bank:
         history's most."""
         return int(np.argmax(np.asarray(kurt) - self.kurtosis))
 
+    def thresholds(self) -> np.ndarray:
+        """Each shaft's threshold for a take read in its chosen band: the largest of every band's (each the largest
+        left-out z of a history take in that band, at least the Gaussian floor). A take's band is the one of many
+        where it is most impulsive, and a healthy take's z there is no draw from one band's null: the largest over
+        every band bounds it whatever band a take chooses (module doc). Reads every band's history."""
+        return np.max([h.thresholds for h in self.histories[:]], axis=0)
+
 
 def history(records: list[np.ndarray], table, top: float | None = None, **options) -> Bank:
     """The healthy history of the records' envelopes in each candidate band (bands(*top*); default: 0.45 of the
@@ -251,7 +265,12 @@ def localise(revolutions: np.ndarray, bank: Bank, table, first_revolution: int =
     spec = _spectrum(revolutions, table)
     kurt = _kurtosis(*spec, bank.candidates)
     i = bank.chosen(kurt)
-    found = L.localise(_band(*spec, bank.candidates[i])[0], bank.histories[i], table, first_revolution)
+    env, hist = _band(*spec, bank.candidates[i])[0], bank.histories[i]
+    found = L.localise(env, hist, table, first_revolution)
+    if any(e.flagged for e in found.ranking):  # over its band's own threshold: read against the selection's (Bank)
+        honest = np.maximum(hist.thresholds, bank.thresholds())
+        note = f"{hist.note}; {SELECTED}"
+        found = L.localise(env, dataclasses.replace(hist, thresholds=honest, note=note), table, first_revolution)
     gears = L.gears_of(table)
     ranking = tuple(
         e if len(e.gears) == 1 else dataclasses.replace(e, gear=L.shaft_label(e.shaft, gears[e.shaft]), which=None)
