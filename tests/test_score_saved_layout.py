@@ -110,7 +110,8 @@ def test_a_history_saved_at_other_points_a_revolution_is_read_on_its_grid(cli, s
     reference = at_points(arrays["reference"][None, :], OLDER_POINTS)[0]
     _save(cond, {**arrays, "history": history, "reference": reference})
     state = _load(_localisation(run))
-    for prefix, points in (("", OLDER_POINTS), ("envelope_", OLDER_ENVELOPE)):
+    bands = [f"envelope{i}_" for i in range(1, len(state["envelope_bands"]))]  # the envelope's other bands too
+    for prefix, points in (("", OLDER_POINTS), ("envelope_", OLDER_ENVELOPE), *((b, OLDER_ENVELOPE) for b in bands)):
         args = json.loads(str(state[f"{prefix}args"])) | {"points": points}
         state[f"{prefix}args"] = np.array(json.dumps(args))
         if state[f"{prefix}reference"].size:
@@ -118,6 +119,7 @@ def test_a_history_saved_at_other_points_a_revolution_is_read_on_its_grid(cli, s
     _save(_localisation(run), state)
     hist, _, why, unread = saved_histories(_load(_localisation(run)), _table(run))
     assert (hist.layout.points, hist.envelope.layout.points, why, unread) == (POINTS, E.POINTS, "", "")
+    assert {h.layout.points for h in hist.envelope.histories[:]} == {E.POINTS}
 
     rows = _rows(cli, run, takes)
     _same_scores(rows, today)

@@ -67,6 +67,8 @@ def saved_histories(arrays: dict, table) -> tuple[L.History | None, NS.NonSyncHi
     why the envelope's or the residual's is not: "" where read) of a run's saved *arrays*, for the gearbox of order
     table *table*."""
     arrays = on_grid(on_grid(arrays, "", POINTS), "envelope_", E.POINTS)  # the grids takes are cut to today
+    for i in range(1, len(arrays.get("envelope_bands", ()))):  # the envelope's other bands (E.state), as its first
+        arrays = on_grid(arrays, f"envelope{i}_", E.POINTS)
     hist, why = _restored(L.History.restored, arrays, table, "localisation")
     envelope, unread = _restored(E.restored, arrays, table, "envelope")  # None: a run stored before it was read
     quiet, off = _restored(NS.NonSyncHistory.restored, arrays, table, "non-synchronous")

@@ -217,6 +217,11 @@ class Bank:
     histories: Sequence[L.History]
     kurtosis: np.ndarray
 
+    @property
+    def layout(self) -> L.Layout:
+        """The envelope's layout: every band's history is laid out alike (the whole residual's, read at once)."""
+        return self.histories[0].layout
+
     def chosen(self, kurt: np.ndarray) -> int:
         """The band a take of spectral kurtosis *kurt* (one per band, as *kurtosis*) is read in: where it exceeds the
         history's most."""
