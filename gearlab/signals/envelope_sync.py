@@ -30,7 +30,9 @@ Its threshold is not its band's alone: the band is the one of many where the tak
 take's z there is larger than one band's left-out takes read (a three-stage healthy take: 4.54 in its band, whose
 threshold was the Gaussian floor 4.06; the history takes, each choosing its band so, read at most 2.8 there, and at
 most 5.19 over every band). A shaft over its band's threshold is read against Bank.thresholds(): the largest over
-every band, a bound on the z of whichever band a healthy take chooses.
+every band, a bound on the z of whichever band a healthy take chooses, and at least the Gaussian floor at the
+false-alarm rate shared among the bands too (the union bound: a few history takes' largest left-out z missed a
+healthy take's 4.46 over 4.06, development seed 349; 4.92 with 4 shafts and 57 bands, 4.78 with 2).
 A take's kurtosis is read in every band, each band's squared envelope at the fewest points that hold it whole (its
 mean and its square's are there what they are at POINTS a turn, to round-off), its envelope in its band alone; a
 band's history is read on its first use (a take's band; every band where a take passes its band's threshold, or the
@@ -72,7 +74,7 @@ FALSE_ALARM = 1e-4
 # named 14 -> 10 of 20 at 0.3 of the mesh amplitude; at 0.8 none lost, dev seed 55)
 OTHER_SHARE = 0.8
 LEVELS = 4  # levels of the binary tree of demodulation bands (bands())
-SELECTED = "the envelope's thresholds the largest over every band (the take's band is one chosen of many)"
+SELECTED = "the envelope's thresholds the largest over every band, the floor's false alarm shared by the bands too"
 SEEN = "seen in the envelope of the record less every shaft's synchronous average"
 
 
@@ -229,10 +231,12 @@ class Bank:
 
     def thresholds(self) -> np.ndarray:
         """Each shaft's threshold for a take read in its chosen band: the largest of every band's (each the largest
-        left-out z of a history take in that band, at least the Gaussian floor). A take's band is the one of many
-        where it is most impulsive, and a healthy take's z there is no draw from one band's null: the largest over
-        every band bounds it whatever band a take chooses (module doc). Reads every band's history."""
-        return np.max([h.thresholds for h in self.histories[:]], axis=0)
+        left-out z of a history take in that band), at least the Gaussian floor at the false-alarm rate shared among
+        the shafts and the bands. A take's band is the one of many where it is most impulsive, and a healthy take's
+        z there is no draw from one band's null: the largest over every band bounds it whatever band a take chooses
+        (module doc). Reads every band's history."""
+        every = np.max([h.thresholds for h in self.histories[:]], axis=0)
+        return np.maximum(every, L.threshold_floor(every.size, FALSE_ALARM / len(self.candidates)))
 
 
 def history(records: list[np.ndarray], table, top: float | None = None, **options) -> Bank:
