@@ -392,15 +392,22 @@ def all_scored(rows: list[dict], alarm: bool = False) -> None:
     """After `gearlab score` has shown its rows: the takes it refused among several named in one line (exit 2, as a
     run stopped by bad input keeps its finished units): the others are scored and kept, and the exit code says not
     every take was. *alarm* (--exit-code): every take scored, exit 1 where any row calls one (a fault, other damage),
-    so that a script run weekly needs no JSON to tell an alarm from none (0)."""
+    else 3 where a row says a take's level changed (a sensor, gain or load: record a new history), so that a script
+    run weekly needs no JSON to tell an alarm from a level change or from none (0)."""
     skipped = [r["file"] for r in rows if r.get("skipped")]
     if skipped:
         given = len(dict.fromkeys(r["file"] for r in rows))
         raise GearlabInputError(f"{len(skipped)} of {given} takes not scored (each said above): {', '.join(skipped)}")
     from .kinds.detection_own import NOT_SCORED  # the kinds import this module: at call time
+    from .kinds.detection_which_gear import is_level_change
 
-    if alarm and any(r["decision"] not in ("healthy", NOT_SCORED) for r in rows):
+    if not alarm:
+        return
+    said = [r["decision"] for r in rows if r["decision"] not in ("healthy", NOT_SCORED)]
+    if any(not is_level_change(d) for d in said):
         raise SystemExit(1)
+    if said:  # no damage called: the level changed
+        raise SystemExit(3)
 
 
 def score_tables(rows: list[dict], run_dir, width: int = 80) -> list:

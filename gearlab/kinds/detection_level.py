@@ -44,6 +44,19 @@ def level_line(ratio: float) -> str:
     )
 
 
+# a take called with nothing localised whose level is off its history's (level_line): its call (decision_of), not damage
+LEVEL_CHANGED = "level changed by a factor of"
+
+
+def level_change(ratio: float | None) -> str:
+    """A called take's decision where its level *ratio* to its history's is more than LEVEL_OFF off and no gear is
+    localised: a sensor of 50 mV/g put in for one of 100 mV/g, the scenario kept, was called 'fault' on every
+    matched_filter unit, though the level line said 0.5 x; "" within LEVEL_OFF or unread (None)."""
+    if ratio is None or not level_why(ratio):
+        return ""
+    return f"{LEVEL_CHANGED} {ratio:.2f} (sensor, gain or load changed?): record a new history"
+
+
 def level_spread(levels) -> float | None:
     """How far a history's own takes lie off their median level: the largest |log| of their *levels* (standard
     deviations, in any one scale) over its median; 0 for a history without a level; None for a history of one

@@ -74,6 +74,7 @@ from .detection_verdict import one_take
 from .detection_which_gear import (
     decided_call,
     decision_of,
+    is_level_change,
     is_other,
     is_undetermined,
     localisation_of,
@@ -615,7 +616,8 @@ def score(
                     s = np.asarray(s, dtype=np.float64)
                     called = int(np.sum(s > thresholds[u]))
                     where = localised.get(f.path, {})
-                    decision = decision_of(most_called(s, thresholds[u]), where.get("call"))
+                    ratio = cond["level_ratio"][f.path]  # off its history's, nothing localised: a level change
+                    decision = decision_of(most_called(s, thresholds[u]), where.get("call"), ratio)
                     if not s.size:  # a take (a run-up's part: _units_of_part) too short for this unit: no 0/0 healthy
                         decision = "not scored"
                     rows.append(
@@ -663,6 +665,8 @@ def score(
             # no flag's name beside every 'healthy': the take's call says nothing was called; other damage localised
             # on an unwatched gear stays said (unwatched)
             call = decided_call(mine[0]["call"], flagged)
+            # a level change (decision_of) is the take's call, in the history too: not 'watched-gear fault (not ...)'
+            call = next((r["decision"] for r in mine if is_level_change(r["decision"])), call)
             for r in mine:
                 r["flaws"], r["scored_on"], r["call"] = flaws, scored_on, call
     # in the order the files were given (week 1, 2, 3, ...), not grouped by condition: the printout and the trend
@@ -717,7 +721,8 @@ def score_trends(run: RunDir) -> list:
             curves.append(Curve(m, x, [v / top for v in y]))
             tops.append(f"{m} {top:.3g}")
             for i, r in enumerate(mine, 1):
-                if is_other(r["decision"]) or is_undetermined(r["decision"]):  # no watched gear's fault
+                d = r["decision"]
+                if is_other(d) or is_undetermined(d) or is_level_change(d):  # no watched gear's fault
                     other.setdefault(r["decision"], set()).add(i)
                 elif r["file"] in quiet:  # damage on a gear not watched, under every threshold: marked all the same
                     other.setdefault(quiet[r["file"]], set()).add(i)

@@ -63,6 +63,7 @@ from ..signals import envelope_sync as E
 from ..signals import localise as L
 from ..signals import nonsync as NS
 from ..signals import which_template as T
+from .detection_level import LEVEL_CHANGED, level_change
 from .detection_records import longest_tsa
 from .detection_saved import saved_histories
 
@@ -124,6 +125,11 @@ def is_other(call: str | None) -> bool:
     return bool(call) and call.startswith((OTHER, NS.HUM))  # a mains hum is no watched gear's either
 
 
+def is_level_change(call: str | None) -> bool:
+    """A take's decision or call says its level changed, nothing localised (detection_level.level_change): no damage."""
+    return bool(call) and call.startswith(LEVEL_CHANGED)
+
+
 def is_undetermined(call: str | None) -> bool:
     """A record's call says its gear could not be read (a take too short for the which-gear check)."""
     return bool(call) and call.startswith(UNDETERMINED)
@@ -178,15 +184,19 @@ def called_takes(records: list[dict]) -> set[str]:
     return out
 
 
-def decision_of(called: bool, call: str | None) -> str:
+def decision_of(called: bool, call: str | None, ratio: float | None = None) -> str:
     """A record's decision (`gearlab score`) from its units' majority called and its call (call_of),
     by the rule the detection run's tables count its flags with (calls_by_label): not called,
     healthy; called on a record whose change lies on another gear, that other damage ("other damage:
     output gear 71T (stage 1)"); called on a record too short to be localised, a fault of no gear ("fault, gear not
-    determined: ..."); otherwise a fault of the watched gear (localised on it, or nowhere)."""
+    determined: ..."); called with nothing localised and its level *ratio* to its history's more than LEVEL_OFF off,
+    a level change (detection_level.level_change: a sensor, gain or load changed), not damage; otherwise a fault of
+    the watched gear (localised on it, at any level, or nowhere)."""
     if not called:
         return "healthy"
-    return call if is_other(call) or is_undetermined(call) else "fault"
+    if is_other(call) or is_undetermined(call):
+        return call
+    return (call == NOT_LOCALISED and level_change(ratio)) or "fault"
 
 
 def evidence(found: dict, nonsync: dict | None = None) -> str:
