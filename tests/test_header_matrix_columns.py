@@ -73,7 +73,7 @@ def test_a_mat4_file_lists_its_variables_and_a_cut_one_is_refused(tmp_path):
     path = _write(tmp_path, "mat4")
     check_recording(path, "s.toml: [target]", {"vibration": "data[0]"}, unit="m/s^2")
     text = _refusal(path, "acc")
-    assert "no channel 'acc'" in text and "data, fs" in text, text
+    assert "no channel 'acc'" in text and "channels: data (and the sampling rate 'fs')" in text, text
     path.write_bytes(path.read_bytes()[:20_000])  # a copy stopped early: 'data' declares 64,000 bytes
     with pytest.raises(GearlabInputError, match=r"key 'file': cannot read .* past the end of the file"):
         check_recording(path, "s.toml: [target]", {"vibration": "data[0]"}, unit="m/s^2")

@@ -148,7 +148,8 @@ def test_header_checks_name_the_table_key_and_file(tmp_path):
         for fact in facts:
             assert fact in text, text
 
-    refused({"vibration": "acc_v", "tacho": "tacho_V"}, "vibration", "did you mean 'acc_V'", "time_s, acc_V, tacho_V")
+    listed = "channels: acc_V, tacho_V (and the time 'time_s')"
+    refused({"vibration": "acc_v", "tacho": "tacho_V"}, "vibration", "did you mean 'acc_V'", listed)
     refused({"vibration": "acc_V"}, "sensitivity", "in volts", "100 mV/g")
     with pytest.raises(GearlabInputError, match="key 'fs'.*no sampling rate"):
         check_recording(layouts(tmp_path)["csv no header"][0], where, {"vibration": 0}, sensitivity=1.0)
