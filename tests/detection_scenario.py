@@ -179,3 +179,19 @@ def training_spy(monkeypatch) -> list:
 
     monkeypatch.setattr(P, "train_method", spy)
     return seen
+
+
+def call_every_row(monkeypatch) -> None:
+    """`gearlab score` in-process with every classical row's thresholds put under its scores: each row calls."""
+    from gearlab.kinds import detection_scoring
+
+    real = detection_scoring.classical_record
+
+    def placed(*args, **kwargs):
+        got = real(*args, **kwargs)
+        for units in got["test_scores"].values():
+            for u, s in units.items():
+                got["thresholds"][u] = float(np.min(s) - 1.0)
+        return got
+
+    monkeypatch.setattr(detection_scoring, "classical_record", placed)

@@ -10,10 +10,8 @@ import shutil
 
 import numpy as np
 import pytest
-from detection_scenario import scenario, shared_run
+from detection_scenario import call_every_row, scenario, shared_run
 from textrecords import signals, text, write_zip
-
-from gearlab.kinds import detection_scoring
 
 BOX = (
     '[gearbox]\nname = "mill39"\n[operation]\nspeed = "30 Hz"\nload = "20 N*m"\n'
@@ -69,16 +67,7 @@ def tiny(tmp_path_factory, module_cache):
 
 def _called(cli, tiny, monkeypatch, take) -> list[dict]:
     """The rows of *take* scored with every classical row's thresholds under its scores: called."""
-    real = detection_scoring.classical_record
-
-    def placed(*args, **kwargs):
-        got = real(*args, **kwargs)
-        for units in got["test_scores"].values():
-            for u, s in units.items():
-                got["thresholds"][u] = float(np.min(s) - 1.0)
-        return got
-
-    monkeypatch.setattr(detection_scoring, "classical_record", placed)
+    call_every_row(monkeypatch)
     mine = shutil.copytree(tiny[0], tiny[0].with_name(f"{tiny[0].name}-{take.stem}"), dirs_exist_ok=True)
     code, stdout, err = cli("score", mine, take, "--json")
     assert code == 0, err

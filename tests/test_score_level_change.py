@@ -12,12 +12,10 @@ from __future__ import annotations
 import json
 import shutil
 
-import numpy as np
 import pytest
-from detection_scenario import scenario, shared_run
+from detection_scenario import call_every_row, scenario, shared_run
 from textrecords import signals, text, write_zip
 
-from gearlab.kinds import detection_scoring
 from gearlab.kinds.detection_which_gear import NOT_LOCALISED, decision_of, is_level_change
 from gearlab.parts import scoring
 from gearlab.runs import RunDir
@@ -40,16 +38,7 @@ def made(tmp_path_factory, module_cache):
 def _scored(cli, made, monkeypatch, name: str, *flags) -> tuple[int, list[dict] | str, RunDir]:
     """A take of *made* scored with every classical row's thresholds under its scores (each row called)."""
     run, half = made
-    real = detection_scoring.classical_record
-
-    def placed(*args, **kwargs):
-        got = real(*args, **kwargs)
-        for units in got["test_scores"].values():
-            for u, s in units.items():
-                got["thresholds"][u] = float(np.min(s) - 1.0)
-        return got
-
-    monkeypatch.setattr(detection_scoring, "classical_record", placed)
+    call_every_row(monkeypatch)
     mine = shutil.copytree(run, run.with_name(f"{run.name}-{name}-{len(flags)}"), dirs_exist_ok=True)
     code, out, err = cli("score", mine, half[name], *flags)
     return code, (json.loads(out) if "--json" in flags else out + err), RunDir.open(mine)

@@ -9,21 +9,20 @@ only the new and the edited ones. Selecting or running a scenario whose mark is 
 the app's thread (Validated waits for the worker's file in progress, if any, and never reads a file twice).
 
 The files are validated in daemon threads, a batch each (BATCH_S), awaited by an async worker as the palette's
-Validate is (validating.py): quitting cancels the worker and the app's run returns without waiting for the batch in
-progress; its result, come after the app has gone, is dropped. The thread fills entries of its own, copied into the
-tree's entries on the app's thread, so that the views never read an entry half filled.
+Validate is (validating.in_daemon_thread): quitting cancels the worker and the app's run returns without waiting for
+the batch in progress; its result, come after the app has gone, is dropped. The thread fills entries of its own,
+copied into the tree's entries on the app's thread, so that the views never read an entry half filled.
 """
 
 from __future__ import annotations
 
-import asyncio
-import threading
 import time
 
 from rich.text import Text
 from textual import work
 
 from .catalog import ScenarioEntry, check
+from .validating import in_daemon_thread
 
 # A thread validates files for about this long before their marks are shown together: a frame drawn for each
 # mark as it landed (29 screen updates to the shipped scenarios' whole tree, 9 with the tree validated before the
@@ -59,37 +58,21 @@ class Checking:
 
     @work(exclusive=True, group="checks")  # a rescan's worker replaces the one before
     async def _check_in_background(self) -> None:
-        loop = asyncio.get_running_loop()
         validated, cwd = self.validated, self.cwd
         while pending := self._pending():
-            done: asyncio.Future = loop.create_future()
 
-            def deliver(result: list[ScenarioEntry] | BaseException, done=done) -> None:  # on the app's thread
-                if done.done():  # the worker was cancelled (a rescan, or the app closing): nothing to set
-                    return
-                if isinstance(result, BaseException):  # not a scenario's mistake (check says those): the worker fails
-                    done.set_exception(result)
-                else:
-                    done.set_result(result)
-
-            def read(paths=tuple(entry.path for entry in pending)) -> None:
-                result: list[ScenarioEntry] | BaseException = []
+            def read(paths=tuple(entry.path for entry in pending)) -> list[ScenarioEntry]:
+                result: list[ScenarioEntry] = []
                 began = time.monotonic()
-                try:
-                    for path in paths:  # until BATCH_S has passed: the marks come a frame for several files
-                        result.append(ScenarioEntry(path))
-                        check(result[-1], validated, cwd)
-                        if time.monotonic() - began > BATCH_S:
-                            break
-                except BaseException as exc:  # handed to the app's thread, raised there
-                    result = exc
-                try:
-                    loop.call_soon_threadsafe(deliver, result)
-                except RuntimeError:  # the app's loop closed: the app quit while this ran
-                    pass
+                for path in paths:  # until BATCH_S has passed: the marks come a frame for several files
+                    result.append(ScenarioEntry(path))
+                    check(result[-1], validated, cwd)
+                    if time.monotonic() - began > BATCH_S:
+                        break
+                return result
 
-            threading.Thread(target=read, name=f"check {pending[0].path.name}", daemon=True).start()
-            landed = [(entry, fresh) for entry, fresh in zip(pending, await done) if not entry.checked]
+            batch = await in_daemon_thread(read, f"check {pending[0].path.name}")
+            landed = [(entry, fresh) for entry, fresh in zip(pending, batch) if not entry.checked]
             for entry, fresh in landed:  # (one checked meanwhile was selected, and validated on the app's thread)
                 entry.gearbox, entry.scenario, entry.error = fresh.gearbox, fresh.scenario, fresh.error
                 entry.runs, entry.checked = fresh.runs, True

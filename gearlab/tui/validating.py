@@ -17,7 +17,9 @@ from __future__ import annotations
 import asyncio
 import threading
 import warnings
+from collections.abc import Callable
 from pathlib import Path
+from typing import TypeVar
 
 from textual import work
 from textual.widgets import Static
@@ -25,6 +27,8 @@ from textual.widgets import Static
 from ..errors import GearlabInputError
 from ..notebook import validate_scenario
 from .catalog import ScenarioEntry
+
+T = TypeVar("T")
 
 
 class ValidatingLine(Static):
@@ -55,29 +59,7 @@ class Validating:
 
     @work(group="validate")
     async def _validate_in_thread(self, path: Path) -> None:
-        loop = asyncio.get_running_loop()
-        done: asyncio.Future = loop.create_future()
-
-        def deliver(result: tuple | BaseException) -> None:  # on the app's thread
-            if done.done():  # the worker was cancelled: the app is closing, nothing left to tell
-                return
-            if isinstance(result, BaseException):  # not a scenario's mistake: the worker fails, as before
-                done.set_exception(result)
-            else:
-                done.set_result(result)
-
-        def read() -> None:
-            try:
-                result: tuple | BaseException = validated_in_thread(path)
-            except BaseException as exc:  # handed to the app's thread, raised there (the worker fails)
-                result = exc
-            try:
-                loop.call_soon_threadsafe(deliver, result)
-            except RuntimeError:  # the app's loop closed: the app quit while this ran
-                pass
-
-        threading.Thread(target=read, name=f"validate {path.name}", daemon=True).start()
-        self._validated(*await done)
+        self._validated(*await in_daemon_thread(lambda: validated_in_thread(path), f"validate {path.name}"))
 
     def _validated(self, said: str | None, error: str | None, warned: list[str]) -> None:
         """Back on the app's thread: the result notified, the line hidden, the folder read again."""
@@ -93,6 +75,34 @@ class Validating:
 
     def _listed_as(self, path: Path) -> str:
         return str(path.relative_to(self.directory)) if path.is_relative_to(self.directory) else str(path)
+
+
+async def in_daemon_thread(read: Callable[[], T], name: str) -> T:
+    """read() in a daemon thread of its own, awaited on the app's loop; what it raises is raised here. Cancelled (the
+    app closing), the await ends at once and the thread's result, come later, is dropped (see the module's doc)."""
+    loop = asyncio.get_running_loop()
+    done: asyncio.Future = loop.create_future()
+
+    def deliver(result: T | BaseException, failed: bool) -> None:  # on the app's thread
+        if done.done():  # the awaiting worker was cancelled: nothing left to tell
+            return
+        if failed:
+            done.set_exception(result)
+        else:
+            done.set_result(result)
+
+    def run() -> None:
+        try:
+            result, failed = read(), False
+        except BaseException as exc:  # handed to the app's thread, raised there (the worker fails)
+            result, failed = exc, True
+        try:
+            loop.call_soon_threadsafe(deliver, result, failed)
+        except RuntimeError:  # the app's loop closed: the app quit while this ran
+            pass
+
+    threading.Thread(target=run, name=name, daemon=True).start()
+    return await done
 
 
 def validated_in_thread(path: Path) -> tuple[str | None, str | None, list[str]]:
