@@ -48,10 +48,22 @@ def level_line(ratio: float) -> str:
 LEVEL_CHANGED = "level changed by a factor of"
 
 
+# the rule in words, where a table or the verdict sets such takes aside
+LEVEL_WORDS = (
+    f"a take called with nothing localised, its level over {LEVEL_OFF:g} x or under 1/{LEVEL_OFF:g} x its history's"
+)
+
+
+def level_factor(call: str) -> str:
+    """The factor a level change's *call* (level_change) names, as written ('2.00')."""
+    return call.removeprefix(LEVEL_CHANGED).split()[0]
+
+
 def level_change(ratio: float | None) -> str:
     """A called take's decision where its level *ratio* to its history's is more than LEVEL_OFF off and no gear is
     localised: a sensor of 50 mV/g put in for one of 100 mV/g, the scenario kept, was called 'fault' on every
-    matched_filter unit, though the level line said 0.5 x; "" within LEVEL_OFF or unread (None)."""
+    matched_filter unit, though the level line said 0.5 x; "" within LEVEL_OFF or unread (None). Where nothing is
+    localised: detection_which_gear.level_call, by which `gearlab score` and a detection run's tables call it alike."""
     if ratio is None or not level_why(ratio):
         return ""
     return f"{LEVEL_CHANGED} {ratio:.2f} (sensor, gain or load changed?): record a new history"

@@ -13,10 +13,10 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..signals.nonsync import HUM
-from .detection_level import REVERSED_CALL, most_called
+from .detection_level import LEVEL_WORDS, REVERSED_CALL, most_called
 from .detection_records import longest_tsa
 from .detection_verdict import OTHER_NONSYNC, detection_lines, watched_calls
-from .detection_which_gear import OTHER, UNDETERMINED, WATCHED, judged_unit
+from .detection_which_gear import OTHER, UNDETERMINED, WATCHED, is_level_change, judged_unit
 from .record_effects import logged
 
 # A median unit this many of its history's unit spreads or more off its threshold is said as '> +100 sd' with the
@@ -147,11 +147,16 @@ def take_lines(summary: Mapping, records: list[Mapping], unit: str) -> list[str]
         # decided_call: a healthy 2 s take under every threshold opened the verdict with an alarm's words)
         if call.startswith(HUM) or (call.startswith(UNDETERMINED) and called):
             said.append(f"{call}; {sure}")
+        largest = take.get("summary", "").removeprefix("nothing localised ")  # '(largest: input z = 1.35, ...)'
+        moved = is_level_change(call) and called  # its level, not damage (level_call): said so
+        if moved:
+            said.append(f"{call}; {sure}, on no gear localised {largest}: not counted as the watched gear's fault")
         if not said and called:
-            largest = take["summary"].removeprefix("nothing localised ")  # '(largest: input z = 1.35, threshold 2.58)'
             said.append(f"{sure}, on no gear localised {largest}: the watched gear's fault by the run's rule")
         said = (
-            [f"{level}: record a history at this load (or gain) before acting on what follows"] if level else []
+            [f"{level}: record a history at this load (or gain) before acting on what follows"]
+            if level and not moved
+            else []
         ) + said
         # a clipped mesh's flattened peaks change its shafts' averages (a healthy 39/61 take clipped over 5 % of its
         # samples: the input pinion, z 32 over 2.6)
@@ -177,8 +182,8 @@ def take_lines(summary: Mapping, records: list[Mapping], unit: str) -> list[str]
 
 def false_alarms_line(summary: Mapping, unit: str) -> str | None:
     """Where the table's false alarms (every unit of a take not labelled the fault, other damage included) and the
-    verdict's (watched_calls: a take whose change lies on another gear or is a bearing's is neither) differ at *unit*,
-    one sentence saying why, with each such row's two rates; None where they agree."""
+    verdict's (watched_calls: a take whose change lies on another gear or is a bearing's, or a level change, is
+    neither) differ at *unit*, one sentence saying why, with each such row's two rates; None where they agree."""
     differ = []
     for r in summary.get("rows") or []:
         if r["unit"] != unit or r.get("false_alarm") is None:
@@ -188,8 +193,11 @@ def false_alarms_line(summary: Mapping, unit: str) -> str | None:
             differ.append(f"{r['condition']} {r['method']} {r['false_alarm']:.0f} % in the table, {verdict:.0f} % here")
     if not differ:
         return None
+    calls = (summary.get("which_gear") or {}).get("calls") or []
+    moved = any(c.get("level_changes") for c in calls if c["unit"] == unit)
     return (
         f"False alarms at {unit}: the table counts every unit of a take not labelled the fault, other damage "
-        f"included; the verdict below counts {OTHER} (another gear's change, a bearing's line) as neither a detection "
-        "nor a false alarm of the watched gear: " + ", ".join(differ) + "."
+        f"{'and level changes ' * moved}included; the verdict below counts {OTHER} (another gear's change, a bearing's "
+        f"line){' and a level change (' + LEVEL_WORDS + ')' if moved else ''} as neither a detection nor a false alarm "
+        "of the watched gear: " + ", ".join(differ) + "."
     )

@@ -21,7 +21,7 @@ from .detection_records import longest_tsa
 from .detection_summary import judged, verdict
 from .detection_units import method_name
 from .detection_verdict import watched_calls
-from .detection_which_gear import which_gear_summary
+from .detection_which_gear import which_gear_summary, with_levels
 
 
 def summarise(scenario: Scenario, run: RunDir) -> None:
@@ -124,10 +124,12 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
         "rows": rows,
         # pinion_sync's attribution per label (shafts_md), shown by the report as table.md shows it
         "shafts_md": shafts_md(attributed, labels),
-        # each test record's change localised on a gear; flags on damage elsewhere (detection_which_gear)
-        "which_gear": which_gear_summary(run.read_json("localisation.json"), records, labels, target.positive),
     }
     conditions = run.read_json("conditions.json")
+    # each test record's change localised on a gear; flags on damage elsewhere (detection_which_gear); a flag with
+    # nothing localised on a take off its history's level: a level change (with_levels), as `gearlab score` calls it
+    loc = with_levels(run.read_json("localisation.json"), conditions)
+    summary["which_gear"] = which_gear_summary(loc, records, labels, target.positive)
     bound = {c: v.get("source_bound", {}) for c, v in (conditions or {}).items()}
     summary["learned"] = [
         {
@@ -152,7 +154,6 @@ def summarise(scenario: Scenario, run: RunDir) -> None:
     summary["warnings"] = [f"warning: {line}" for v in (conditions or {}).values() for line in v.get("warnings", [])]
     # a take called with no gear named, off its history's level further than the history's own takes are (as gearlab
     # score says it)
-    loc = run.read_json("localisation.json")
     summary["warnings"] += [f"warning: {line}" for line in called_levels(conditions or {}, records, loc)]
     summary["warnings"] += [f"warning: {line}" for line in unchanged_by_correction(records)]
     run.write_json("summary.json", summary)

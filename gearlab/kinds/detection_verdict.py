@@ -10,6 +10,7 @@ from collections.abc import Mapping
 from statistics import NormalDist
 
 from ..signals.nonsync import HUM
+from .detection_level import LEVEL_WORDS, level_factor
 
 # What a user asks of a record-level decision (docs/real_data.md): the fault found in at least
 # 90 % of the faulty units at no more than 5 % false alarms, with an AUC of 0.95 or more.
@@ -120,7 +121,9 @@ def watched_calls(row: Mapping, summary: Mapping) -> Mapping:
     false alarms' count and their denominator alike (counted in, an other-damage take not flagged
     diluted a healthy take's false alarms: 4 % said for 8 %); its AUC over the same takes (calls_by_label's:
     counted in, such a take flagged on every unit ranked as a healthy take's false alarms, an AUC of 0.50
-    beside 0 % false alarms). The row as it is when the run localised nothing."""
+    beside 0 % false alarms). A unit of a take called a level change (nothing localised, its level off its history's:
+    detection_which_gear.level_call) is set aside alike: no detection, no false alarm. The row as it is when the run
+    localised nothing."""
     calls = (summary.get("which_gear") or {}).get("calls") or []
     call = next(
         (
@@ -139,7 +142,10 @@ def watched_calls(row: Mapping, summary: Mapping) -> Mapping:
     # a flag of no gear (a record too short for the which-gear check) is no detection of the watched gear, but an
     # alarm all the same on a healthy take
     alarms = {k: call["watched"][k] + ((call.get("undetermined") or {}).get(k) or 0.0) for k in negative}
-    false_alarm = sum(alarms[k] * call["units"][k] for k in negative) / n if n else row["false_alarm"]
+    # every negative take set aside (other damage, a level change): no false alarm to count, not the table's
+    false_alarm = (
+        sum(alarms[k] * call["units"][k] for k in negative) / n if n else None if negative else row["false_alarm"]
+    )
     judged_auc = {"auc": call["auc"]} if "auc" in call else {}  # a summary from before it: the row's
     return {
         **row,
@@ -152,18 +158,33 @@ def watched_calls(row: Mapping, summary: Mapping) -> Mapping:
 def left_out(summary: Mapping, condition: str, unit: str) -> str:
     """The takes of *condition* the AUC and false alarms at *unit* leave out (calls_by_label's left_out), in words
     as each take's call says it: as other damage ('; left out of AUC and false alarms as other damage: b.csv (other
-    damage: output gear 58T (stage 3))'), a mains hum as no gear fault; else ""."""
-    calls = (summary.get("which_gear") or {}).get("calls") or []
+    damage: output gear 58T (stage 3))'), a mains hum as no gear fault; then the takes of any label set aside as a
+    level change, counted ('; set aside as a level change: 1 take (h3.zip, 2.00 x), ...'); else ""."""
+    calls = [
+        c
+        for c in (summary.get("which_gear") or {}).get("calls") or []
+        if (c["condition"], c["unit"]) == (condition, unit)
+    ]
     out: dict = {}
+    moved: dict = {}
     for c in calls:
-        if (c["condition"], c["unit"]) == (condition, unit):
-            out |= c.get("left_out") or {}
-    if not out:
-        return ""
+        moved |= c.get("level_changes") or {}
+        out |= {p: w for p, w in (c.get("left_out") or {}).items() if p not in moved}
     kinds = {"other damage": {p: w for p, w in out.items() if not w.startswith(HUM)}}
     kinds["no gear fault"] = {p: w for p, w in out.items() if w.startswith(HUM)}
     said = [f"as {k}: " + ", ".join(f"{p} ({w})" for p, w in v.items()) for k, v in kinds.items() if v]
-    return "; left out of its AUC and false alarms " + "; ".join(said)
+    text = "; left out of its AUC and false alarms " + "; ".join(said) if said else ""
+    if moved:
+        takes = ", ".join(f"{_file(p)}, {level_factor(w)} x" for p, w in moved.items())
+        text += (
+            f"; set aside as a level change: {len(moved)} take{'s' * (len(moved) > 1)} ({takes}: {LEVEL_WORDS}; no "
+            "detection or false alarm here, its units in the table's raw rates; record a new history)"
+        )
+    return text
+
+
+def _file(path: str) -> str:
+    return path.replace("\\", "/").rsplit("/", 1)[-1]
 
 
 def detection_lines(summary: Mapping, unit: str | None) -> list[str]:
@@ -178,10 +199,12 @@ def detection_lines(summary: Mapping, unit: str | None) -> list[str]:
     if unit is None:
         return []
     learned = {(r["condition"], r["method"]): r for r in summary.get("learned") or []}
-    localised = any("units" in c for c in (summary.get("which_gear") or {}).get("calls") or [])
+    calls = (summary.get("which_gear") or {}).get("calls") or []
+    localised, moved = any("units" in c for c in calls), any(c.get("level_changes") for c in calls)
     lines = [
         f"At {unit} (detected / false alarms % at the history's threshold"
         + (", a unit on a record whose change lies on another gear being other damage, neither" if localised else "")
+        + (" (a level change too)" if moved else "")
         + f"; goal: AUC >= {GOAL_AUC}, >= {GOAL_DETECTION:.0f} % detected at <= {GOAL_FALSE_ALARM:.0f} % false alarms):"
     ]
     for c in dict.fromkeys(r["condition"] for r in rows):

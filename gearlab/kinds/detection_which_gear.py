@@ -63,7 +63,7 @@ from ..signals import envelope_sync as E
 from ..signals import localise as L
 from ..signals import nonsync as NS
 from ..signals import which_template as T
-from .detection_level import LEVEL_CHANGED, level_change
+from .detection_level import LEVEL_CHANGED, LEVEL_WORDS, level_change, level_factor
 from .detection_records import longest_tsa
 from .detection_saved import saved_histories
 
@@ -155,10 +155,11 @@ def is_also_other(call: str | None) -> bool:
 
 def decided_call(call: str | None, called: bool) -> str | None:
     """A take's call as decided: NOT_CALLED where no method's decision calls it (*called*) and *call* names no gear (a
-    flag's name alone: 'watched-gear fault (not localised)', or 'fault, gear not determined' of a take too short for
-    the which-gear check); else *call* (a gear or a bearing-like line named stays said). A run's summary and `gearlab
-    score`'s rows say it alike."""
-    return NOT_CALLED if not called and (call == NOT_LOCALISED or is_undetermined(call)) else call
+    flag's name alone: 'watched-gear fault (not localised)', 'fault, gear not determined' of a take too short for
+    the which-gear check, or a level change); else *call* (a gear or a bearing-like line named stays said). A run's
+    summary and `gearlab score`'s rows say it alike."""
+    unnamed = call == NOT_LOCALISED or is_undetermined(call) or is_level_change(call)
+    return NOT_CALLED if not called and unnamed else call
 
 
 def judged_unit(records: list[dict], path: str, unit: str) -> str:
@@ -184,19 +185,40 @@ def called_takes(records: list[dict]) -> set[str]:
     return out
 
 
+def level_call(call: str | None, ratio: float | None) -> str | None:
+    """What a flag on a take means, its level *ratio* to its history's read: level_change where its *call*
+    (call_of) localises nothing (no gear, no bearing-like line, not a take too short to read) and
+    the ratio is more than LEVEL_OFF off; else *call* (a gear localised: its damage at any level). The one rule that
+    `gearlab score`'s decisions (decision_of) and a detection run's tables (with_levels) call a level change by: a
+    healthy take at twice its history's gain was NA4's false alarm in the run, 'level changed' in score."""
+    return (call == NOT_LOCALISED and level_change(ratio)) or call
+
+
+def with_levels(loc: dict | None, conditions: dict | None) -> dict | None:
+    """localisation.json *loc* with each test take's call as level_call reads it at its level over its history's
+    (conditions.json's "level_ratio": none in a run from before it was kept), for the run's tables and verdict; the
+    stored file keeps the localisation's own call (what `gearlab score` of the take compares its own with)."""
+    if not loc:
+        return loc
+    ratios = {p: r for c in (conditions or {}).values() for p, r in (c.get("level_ratio") or {}).items()}
+    records = loc.get("records") or {}
+    return {**loc, "records": {p: {**r, "call": level_call(r.get("call"), ratios.get(p))} for p, r in records.items()}}
+
+
 def decision_of(called: bool, call: str | None, ratio: float | None = None) -> str:
     """A record's decision (`gearlab score`) from its units' majority called and its call (call_of),
     by the rule the detection run's tables count its flags with (calls_by_label): not called,
     healthy; called on a record whose change lies on another gear, that other damage ("other damage:
     output gear 71T (stage 1)"); called on a record too short to be localised, a fault of no gear ("fault, gear not
     determined: ..."); called with nothing localised and its level *ratio* to its history's more than LEVEL_OFF off,
-    a level change (detection_level.level_change: a sensor, gain or load changed), not damage; otherwise a fault of
-    the watched gear (localised on it, at any level, or nowhere)."""
+    a level change (level_call, the run's tables' rule too: a sensor, gain or load changed), not
+    damage; otherwise a fault of the watched gear (localised on it, at any level, or nowhere)."""
     if not called:
         return "healthy"
     if is_other(call) or is_undetermined(call):
         return call
-    return (call == NOT_LOCALISED and level_change(ratio)) or "fault"
+    said = level_call(call, ratio)
+    return said if is_level_change(said) else "fault"
 
 
 def evidence(found: dict, nonsync: dict | None = None) -> str:
@@ -524,11 +546,12 @@ def _nonsync_cell(ns: dict | None) -> str:
 def calls_by_label(loc: dict, records: list[dict], labels: dict, positive: str = "fault") -> list[dict]:
     """Per condition and method, for the longest TSA: of each test label's units, the % called a
     watched-gear fault, the % called other damage (the record's change localised elsewhere; on a
-    watched gear and another gear: counted in both) and the % called a fault of no gear (``undetermined``:
-    a record too short for the which-gear check), the units, and those on records not called other
-    damage only (``judged``: what a false alarm is counted of); the AUC of the same units the detected
-    and false-alarm figures count (``auc``: every *positive* take's against the other labels' takes not
-    called other damage) and the takes it leaves out (``left_out``: {path: call})."""
+    watched gear and another gear: counted in both), the % called a fault of no gear (``undetermined``:
+    a record too short for the which-gear check) and the % called a level change (``level``: nothing localised, the
+    take's level off its history's: with_levels, its takes ``level_changes``: {path: call}), the
+    units, and those on records called neither other damage nor a level change (``judged``: what a false alarm is
+    counted of); the AUC of the same units the detected and false-alarm figures count (``auc``: every *positive*
+    take's against the other labels' judged takes) and the takes it leaves out (``left_out``: {path: call})."""
     if not loc or not records:
         return []
     unit = longest_tsa(u for r in records for u in r["thresholds"])
@@ -540,6 +563,8 @@ def calls_by_label(loc: dict, records: list[dict], labels: dict, positive: str =
         watched: dict[str, list[int]] = {}
         other: dict[str, list[int]] = {}
         undetermined: dict[str, list[int]] = {}
+        level: dict[str, list[int]] = {}
+        level_changes: dict[str, str] = {}
         judged: dict[str, int] = {}
         ranked: dict[bool, list] = {True: [], False: []}  # the positive takes' units, the judged negatives'
         left_out: dict[str, str] = {}
@@ -548,15 +573,18 @@ def calls_by_label(loc: dict, records: list[dict], labels: dict, positive: str =
             flagged = s > thr
             call = loc["records"].get(path, {}).get("call")
             elsewhere, also = is_other(call), is_also_other(call)  # also: the watched gear's and other damage
-            unread = is_undetermined(call)
+            unread, moved = is_undetermined(call), is_level_change(call)
             label = labels[path]
-            watched.setdefault(label, []).extend((flagged & ~elsewhere & ~unread).astype(int).tolist())
+            watched.setdefault(label, []).extend((flagged & ~elsewhere & ~unread & ~moved).astype(int).tolist())
             undetermined.setdefault(label, []).extend((flagged & unread).astype(int).tolist())
             other.setdefault(label, []).extend((flagged & (elsewhere or also)).astype(int).tolist())
-            judged[label] = judged.get(label, 0) + (0 if elsewhere else len(s))
-            # a negative take called other damage leaves the AUC as it leaves the false alarms (it counted as a
-            # negative there, its flags ranked as false alarms the false-alarm figure does not count)
-            if label == positive or not elsewhere:
+            level.setdefault(label, []).extend((flagged & moved).astype(int).tolist())
+            if moved:
+                level_changes[path] = call
+            judged[label] = judged.get(label, 0) + (0 if elsewhere or moved else len(s))
+            # a negative take called other damage or a level change leaves the AUC as it leaves the false alarms (it
+            # counted as a negative there, its flags ranked as false alarms the false-alarm figure does not count)
+            if label == positive or not (elsewhere or moved):
                 ranked[label == positive].append(s)
             else:
                 left_out[path] = call
@@ -568,6 +596,8 @@ def calls_by_label(loc: dict, records: list[dict], labels: dict, positive: str =
                 "watched": {k: 100.0 * float(np.mean(v)) if v else None for k, v in watched.items()},
                 "other": {k: 100.0 * float(np.mean(v)) if v else None for k, v in other.items()},
                 "undetermined": {k: 100.0 * float(np.mean(v)) if v else None for k, v in undetermined.items()},
+                "level": {k: 100.0 * float(np.mean(v)) if v else None for k, v in level.items()},
+                "level_changes": level_changes,
                 "units": {k: len(v) for k, v in watched.items()},
                 "judged": judged,
                 "auc": auc(*(np.concatenate(ranked[k] or [np.empty(0)]) for k in (False, True))),
@@ -579,15 +609,20 @@ def calls_by_label(loc: dict, records: list[dict], labels: dict, positive: str =
 
 def calls_md(calls: list[dict]) -> str:
     """calls_by_label as a table: 'watched % / other %' per label, '/ not determined %' beside them where a record
-    was too short for the which-gear check."""
+    was too short for the which-gear check, '/ level change %' where a take's level was off its history's with nothing
+    localised (its takes counted under the table: the raw called % is labels_md's)."""
     if not calls:
         return ""
     labels = list(dict.fromkeys(k for c in calls for k in c["watched"]))
     unit = calls[0]["unit"]
     unread = any(v for c in calls for v in (c.get("undetermined") or {}).values())
+    moved = {p: w for c in calls for p, w in (c.get("level_changes") or {}).items()}
     head, said = ("", "")
     if unread:
         head, said = " / not determined", "; gear not determined: a record too short for the which-gear check"
+    if moved:
+        head += " / level change"
+        said += f"; level change: {LEVEL_WORDS}, set aside from the watched gear's rates (the raw: the table above)"
     out = [
         f"\nUnits called (% of each test label's {unit} units): a watched-gear fault / other damage (the "
         f"record's change localised on another gear; on a watched gear and another: counted in both){said}\n",
@@ -598,8 +633,12 @@ def calls_md(calls: list[dict]) -> str:
         cells = []
         for k in labels:
             w, o, u = c["watched"].get(k), c["other"].get(k), (c.get("undetermined") or {}).get(k)
-            cells.append("–" if w is None else f"{w:.0f} / {o:.0f}" + (f" / {u or 0:.0f}" if unread else ""))
+            cell = f"{w:.0f} / {o:.0f}" + (f" / {u or 0:.0f}" if unread else "")
+            cells.append("–" if w is None else cell + (f" / {(c.get('level') or {}).get(k) or 0:.0f}" if moved else ""))
         out.append(f"| {c['condition']} | {c['method']} | " + " | ".join(cells) + " |")
+    if moved:
+        takes = ", ".join(f"{p} ({level_factor(w)} x)" for p, w in moved.items())
+        out.append(f"\nSet aside as a level change: {len(moved)} take{'s' * (len(moved) > 1)}: {takes}")
     return "\n".join(out) + "\n"
 
 
