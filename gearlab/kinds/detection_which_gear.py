@@ -633,8 +633,8 @@ def calls_md(calls: list[dict]) -> str:
         cells = []
         for k in labels:
             w, o, u = c["watched"].get(k), c["other"].get(k), (c.get("undetermined") or {}).get(k)
-            cell = f"{w:.0f} / {o:.0f}" + (f" / {u or 0:.0f}" if unread else "")
-            cells.append("–" if w is None else cell + (f" / {(c.get('level') or {}).get(k) or 0:.0f}" if moved else ""))
+            level = f" / {(c.get('level') or {}).get(k) or 0:.0f}" if moved else ""
+            cells.append("–" if w is None else f"{w:.0f} / {o:.0f}" + (f" / {u or 0:.0f}" if unread else "") + level)
         out.append(f"| {c['condition']} | {c['method']} | " + " | ".join(cells) + " |")
     if moved:
         takes = ", ".join(f"{p} ({level_factor(w)} x)" for p, w in moved.items())
