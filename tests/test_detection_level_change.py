@@ -62,7 +62,11 @@ def test_a_healthy_take_at_twice_the_gain_is_a_level_change_in_the_run_s_tables(
     table = (run / "table.md").read_text()
     row = next(line for line in table.splitlines() if line.startswith("| 16 Hz | ../data/h3.zip | healthy | nothing"))
     assert row.endswith(f"| {h3} |"), row  # the which-gear table's 'a flag would be called'
-    assert "watched / other / level change %" in table, table
+    # both rates, where the labels are known: the raw 'det % / FA %' and 'called %' tables, and the which-gear one with
+    # the level change set aside, counted
+    assert "watched / other / level change %" in table and "| 16 Hz | na4 | 100 / 0 / 0 | 0 / 0 / 50 |" in table, table
+    assert "| 16 Hz | na4 | 100 | 50 |" in table, table
+    assert "Set aside as a level change: 1 take: ../data/h3.zip (2.00 x)" in table, table
 
 
 def test_its_flags_are_set_aside_from_the_verdict_s_rates_the_raw_ones_kept(made):

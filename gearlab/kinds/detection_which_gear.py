@@ -622,7 +622,8 @@ def calls_md(calls: list[dict]) -> str:
         head, said = " / not determined", "; gear not determined: a record too short for the which-gear check"
     if moved:
         head += " / level change"
-        said += f"; level change: {LEVEL_WORDS}, set aside from the watched gear's rates (the raw: the table above)"
+        said += f"; level change: {LEVEL_WORDS}, set aside from the watched gear's rates (the raw: the 'det % / "
+        said += "FA %' and 'called %' tables)"
     out = [
         f"\nUnits called (% of each test label's {unit} units): a watched-gear fault / other damage (the "
         f"record's change localised on another gear; on a watched gear and another: counted in both){said}\n",
