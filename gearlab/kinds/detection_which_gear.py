@@ -22,6 +22,8 @@ units then means:
     speed, no history take at another speed holding it)                (bearing-like) or mains hum, ...
     nothing localised, no non-synchronous change                       a watched-gear fault (not
                                                                        localised: no evidence of where)
+    ... the take's level more than LEVEL_OFF off its history's         level changed by a factor of X.XX
+    (level_call: a sensor, gain or load changed; `gearlab score` too)  (...): no damage, set aside
     a watched gear's shaft and another shaft over their thresholds     a watched-gear fault; also
     (a pinion and its wheel both damaged)                              other damage: <that gear>
     a gear named and a non-synchronous line at no shaft's order        ...; also other damage: non-
@@ -41,7 +43,8 @@ A change no shaft's synchronous average carries is no gear's: a bearing's strike
 that is no shaft's order, and slip, so the detectors may flag them while no shaft's TSA changed. The
 record less every shaft's synchronous average (signals.nonsync) is read against the history's: a line
 of its envelope beyond the history's threshold is other damage at that strike order, never the
-watched gear's. Only where neither is found is a flag the watched gear's, said as not localised.
+watched gear's. Only where neither is found, the take at its history's level, is a flag the watched
+gear's, said as not localised.
 The localisation uses the records' signals only; the labels come in with the tables (summarise).
 """
 
