@@ -249,12 +249,29 @@ def runs(tmp_path_factory):
         gap = run_scenario(HERE / "tui_scenarios" / "tgap.toml", out=base / "runs").path
         data = run_scenario(HERE / "tui_scenarios" / "tdata.toml", out=base / "runs").path
         (base / "det").mkdir()
+        drawn = figures_watched(mp)
         found = run_scenario(detection_scenario(base / "det"), out=base / "runs").path
     # The second transfer run is a copy of the first under a later time stamp: the same scenario and
     # seeds give the same records (tests/test_crash_safety.py); these tests read two runs, not the engine.
     second = first.with_name(f"{first.name[:-6]}{int(first.name[-6:]) + 1:06d}")
     shutil.copytree(first, second)
-    return {"transfer": [first, second], "gap": gap, "dataset": data, "detection": found}
+    return {"transfer": [first, second], "gap": gap, "dataset": data, "detection": found, "drawn": drawn}
+
+
+def figures_watched(mp) -> dict:
+    """The figures saved (gearlab.plots.save, the real one around it) and those measured for a tight bounding
+    box (Figure.get_tightbbox) from here on: the detection run's own figures watched as it draws them, for
+    test_detection_figures_skip_the_tight_bbox_pass_and_keep_within_their_canvas, rather than drawn a second
+    time there (3.5 s of this file's 30 s of CPU). A save not gearlab's own draws them in this process."""
+    from matplotlib.figure import Figure
+
+    from gearlab import plots
+
+    drawn = {"measured": [], "saved": []}
+    tight, save = Figure.get_tightbbox, plots.save
+    mp.setattr(Figure, "get_tightbbox", lambda fig, *a, **k: drawn["measured"].append(fig) or tight(fig, *a, **k))
+    mp.setattr(plots, "save", lambda fig, path, **o: drawn["saved"].append(fig) or save(fig, path, **o))
+    return drawn
 
 
 def test_detection_verdict_names_the_goal_rows_the_best_of_each_family_and_what_learned_nothing():
@@ -487,24 +504,16 @@ def test_each_kinds_report_renders_in_a_headless_browser(runs, tmp_path):
     check_reports([(run / "report.html", tmp_path / kind) for kind, run in kinds.items()])
 
 
-def test_detection_figures_skip_the_tight_bbox_pass_and_keep_within_their_canvas(runs, tmp_path, monkeypatch):
+def test_detection_figures_skip_the_tight_bbox_pass_and_keep_within_their_canvas(runs):
     """Issue 41: a detection figure took 0.9 s; bbox_inches='tight' measured every artist of the
     figure again after its constrained layout had placed them all on the canvas (a third of the
-    scores figure's time). They are saved without it, and nothing lies outside the PNG."""
+    scores figure's time). They are saved without it, and nothing lies outside the PNG. The
+    figures are the detection run's own, watched as the run drew them (figures_watched)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from gearlab import plots
-    from gearlab.kinds import detection_figures
-    from gearlab.runs import RunDir
-
-    copy = tmp_path / "run"
-    shutil.copytree(runs["detection"], copy)
-    measured, saved = [], []
-    tight, save = Figure.get_tightbbox, plots.save
-    monkeypatch.setattr(Figure, "get_tightbbox", lambda fig, *a, **k: measured.append(fig) or tight(fig, *a, **k))
-    monkeypatch.setattr(plots, "save", lambda fig, path, **o: saved.append(fig) or save(fig, path, **o))
-    detection_figures.draw(RunDir.open(copy))
+    tight = Figure.get_tightbbox
+    saved, measured = runs["drawn"]["saved"], runs["drawn"]["measured"]
     assert len(saved) == 3 and measured == []  # the ROC, the scores and the scores in time order
     for fig in saved:  # closed once saved: a canvas of its own to measure it
         box = tight(fig, FigureCanvasAgg(fig).get_renderer()).transformed(fig.dpi_scale_trans)
