@@ -162,23 +162,34 @@ def implied_marks(ppr: int, ratio: float | None) -> set[int]:
     count, else {}. An encoder's count typed a factor off (6 for 60, 360 for 36) lies beyond 8."""
     if ratio is None or ratio <= 0:
         return set()
-    marks = round(ppr * ratio)
+    marks = _whole_count(ppr, ratio)
     return {marks} if marks > 8 and marks != ppr and abs(ppr * ratio / marks - 1) < 0.05 else set()
 
 
-def speed_marks_line(speed: float, described: float | None, ppr: int | None, where: str) -> str | None:
+def _whole_count(ppr: int, ratio: float) -> int:
+    """The whole count of marks nearest *ppr* x *ratio*, a whole multiple or divisor of *ppr* first where one lies
+    within 5 %: a count typed a factor off (6 for 60) read on a shaft 1 % off its described speed is 60.6 x, and 61
+    marks a turn is no encoder's count."""
+    k = round(ratio) if ratio >= 1 else round(1 / ratio)
+    typed = ppr * k if ratio >= 1 else (ppr // k if k and ppr % k == 0 else 0)
+    return typed if typed and abs(ppr * ratio / typed - 1) < 0.05 else round(ppr * ratio)
+
+
+def speed_marks_line(
+    speed: float, described: float | None, ppr: int | None, where: str, table: str = "[target]"
+) -> str | None:
     """The one line of a tacho whose *speed* read is a whole count of marks off the *described* speed (a 60-mark
-    encoder typed as 6: 600 Hz read for 60): the gap's refusal of a record too coarse for the mesh at that speed
-    said "[target] key 'fs'" instead. *where*: the scenario's location of pulses_per_rev. None where no count fits
-    or the speed is within 25 % of the described (slip, another load)."""
+    encoder typed as 6: 600 Hz read for 60). *where*: the location of the pulses_per_rev read, in *table* (a
+    scenario's [target], a 'files' entry, the description's [sensor]). None where no count fits or the speed is
+    within 25 % of the described (slip, another load)."""
     if not described or not ppr or 0.8 <= speed / described <= 1.25:
         return None
-    marks = next(iter(implied_marks(ppr, speed / described) | {round(ppr * speed / described)}))
+    marks = _whole_count(ppr, speed / described)
     if marks < 1 or marks == ppr or abs(ppr * speed / described / marks - 1) >= 0.05:
         return None
     return (
         f"{where}: the tacho reads the shaft at {speed:.4g} Hz, {speed / described:.3g} x the described "
-        f"{described:.4g} Hz: {marks_words(marks, ppr, '[target]')}"
+        f"{described:.4g} Hz: {marks_words(marks, ppr, table)}"
     )
 
 

@@ -645,9 +645,12 @@ def cut_recording(
     tacho_shaft=None,
     settle_window: int = 1,
     keep_read: bool = False,
+    before_cut=None,
 ) -> CutRecording:
     """Read a record (read_recording), find the input's angle (shaft_angle; *tacho_shaft* a TachoShaft) and
-    cut its complete revolutions (*transient* "stats" drops a start-up over settle_turns or *settle_window*)."""
+    cut its complete revolutions (*transient* "stats" drops a start-up over settle_turns or *settle_window*).
+    *before_cut*(fs, mean input speed in Hz): called once the angle is known, before the cut, the dear part of a
+    read (a tacho's count typed 10 x short makes 10 x the revolutions: parts.measured.Target.read refuses it)."""
     from ..signals import POINTS, cut_revolutions
 
     rec = read_recording(path, vibration, tacho, fs=fs, sensitivity=sensitivity, gain=gain, unit=unit, where=where)
@@ -668,6 +671,8 @@ def cut_recording(
             f"{path}: by {how}, the record shows {turns:.3g} revolutions in {raw.size} samples at "
             f"{fmt_hz(rec.fs)}; expected at least 2 (is pulses_per_rev right?)"
         )
+    if before_cut is not None:
+        before_cut(rec.fs, turns * rec.fs / max(angle.size - 1, 1))
     with prefixed(f"{path}: vibration column {_one_line_repr(rec.vibration)}"):
         cut = cut_revolutions(raw, rec.fs, **source, points=points or POINTS, transient="none")
     start, warning = 0, None

@@ -65,7 +65,6 @@ from .gap_inputs import (
     Records,
     TargetEntry,
     check_healthy,
-    check_marks,
     check_points,
     check_sampling,
     read_history,
@@ -371,8 +370,6 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
 
             described, shaft = operating_point(spec.source)[0], spec.target.target.read_as
             target_X, speed, record_notes, fs, from_mesh, ts = read_history(spec.target, on_event, (described, z1))
-            if not from_mesh:  # a tacho's count typed a factor off reads another speed: said before the rate
-                check_marks(fs / speed, z1, speed, described, spec.target.target.pulses_per_rev, scenario.path)
             check_points(
                 fs / speed,
                 z1,

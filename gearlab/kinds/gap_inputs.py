@@ -190,17 +190,6 @@ def check_sampling(spec: DatasetSpec, z1: int, where: str) -> None:
     check_points(spec.fs / speed, z1, f"{where} key 'fs'", f"fs = {spec.fs:g} Hz at {speed:g} Hz")
 
 
-def check_marks(points: float, z1: int, speed: float, described: float | None, ppr: int | None, path) -> None:
-    """A record too coarse for the mesh (check_points) at a tacho's speed a whole count of marks off the described
-    (inspect_tacho.speed_marks_line): the marks' line, naming [target] pulses_per_rev, not the rate."""
-    from ..inspect_tacho import speed_marks_line
-    from ..scenario import location
-
-    line = speed_marks_line(speed, described, ppr, location(path, "target", "pulses_per_rev"))
-    if points < 2 * (z1 + SIDEBANDS) + 1 and line:
-        raise GearlabInputError(line)
-
-
 def check_points(points: float, z1: int, where: str, what: str) -> None:
     need = 2 * (z1 + SIDEBANDS) + 1
     if points < need:

@@ -73,6 +73,12 @@ class Target:
     unit: str | None = None  # the vibration's unit where its name and file say none (recordings.UNITS)
     tacho_shaft: TachoShaft | None = None  # a tacho on another shaft than the input (None: the input)
     settle_window: int = 1  # the input turns a start-up is judged over: the [source]'s slowest shaft's turn
+    # the [source] description's (input speed in Hz, first pinion's teeth): a tacho's count typed a factor off
+    # is refused at the read (inspect_tacho.refuse_marks); () where it states no speed
+    described: tuple = ()
+    # (file path, location, table) of the key each tacho record's pulses_per_rev came from (its entry, the
+    # [target], the description's [sensor])
+    pulses_at: tuple = ()
 
     def keys_of(self, file: TargetFile) -> dict:
         """The acquisition keys *file* is read with: its own, else the target's ('tacho_shaft': a TachoShaft,
@@ -112,17 +118,26 @@ class Target:
         description's mesh orders show (refining a declared one to ±1 %: recordings.shaft_angle)."""
         from ..gearbox import resolve_gearbox
 
+        keys, at = self.keys_of(file), dict((p, (w, t)) for p, w, t in self.pulses_at).get(file.path)
+        marks = None
+        if self.described and at and keys["tacho"] is not None:
+
+            def marks(fs: float, speed: float) -> None:
+                refuse_marks(fs, speed, self.described, keys["pulses_per_rev"], *at)
+
         try:
             return cut_recording(
                 file.resolved,
-                **self.keys_of(file),  # its tacho_shaft too
+                **keys,  # its tacho_shaft too
                 transient=self.transient,
                 speed_hz=file.speed_hz if file.speed_hz is not None else self.speed_hz,
                 gearbox=resolve_gearbox(self.gearbox) if self.gearbox else None,
                 settle_window=self.settle_window,
+                before_cut=marks,
             )
         except GearlabInputError as exc:  # what the data shows (a ragged row, a NaN): named where it is listed
-            if exc.args and isinstance(exc.args[0], str) and "[target]" not in exc.args[0]:
+            said = exc.args and isinstance(exc.args[0], str) and at and exc.args[0].startswith(at[0])
+            if exc.args and isinstance(exc.args[0], str) and "[target]" not in exc.args[0] and not said:
                 at = f"[target] key 'files' entry {file.entry or self.files.index(file) + 1} key 'file'"  # a take's
                 exc.args = (f"{at}: {exc.args[0]}", *exc.args[1:])
             raise
@@ -379,7 +394,34 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
         keys["unit"],
         shaft,
         settle_turns(box),
+        () if box is None or not box.speed_hz else (box.speed_hz, box.stages[0].pinion.z),
+        tuple(pulses_at(f, q, t, box, where) for f, q in zip(files, tachos) if q is not None),
     )
+
+
+def pulses_at(f: TargetFile, tacho, t: dict, box, where: str) -> tuple:
+    """(path, location, table) of the key *f*'s pulses_per_rev came from (pulses_of's order): its 'files' entry's,
+    the [target] table *t*'s, else the description *box*'s [sensor] (1 where none gives one: the [target]'s)."""
+    if dict(f.keys).get("pulses_per_rev") is not None:
+        return f.path, f"{where} key 'files' entry {f.entry} key 'pulses_per_rev'", "[target] 'files' entry"
+    if t.get("pulses_per_rev") is None and box is not None and tacho is not None:
+        return f.path, f"{box.source}: [sensor] key 'pulses_per_rev'", "[sensor]"
+    return f.path, f"{where} key 'pulses_per_rev'", "[target]"
+
+
+def refuse_marks(fs: float, speed: float, described: tuple, ppr: int, where: str, table: str) -> None:
+    """Refuse a record read at a tacho's *speed* a whole count of marks off the *described* (input speed in Hz, the
+    first pinion's teeth) with too few samples a revolution for that mesh (*fs* / *speed*): its count typed a
+    factor off (inspect_tacho.speed_marks_line, naming *where* in *table*), not the sampling rate, and before
+    the record is cut into that many revolutions (a 60-mark encoder typed as 6: 10 x the revolutions, minutes a
+    take)."""
+    from ..gap.structure import SIDEBANDS
+    from ..inspect_tacho import speed_marks_line
+
+    hz, z1 = described
+    line = speed_marks_line(speed, hz, ppr, where, table)
+    if line and fs / speed < 2 * (z1 + SIDEBANDS) + 1:  # the gap's need (gap_inputs.check_points)
+        raise GearlabInputError(line)
 
 
 def own_shafts(files: tuple[TargetFile, ...], tachos: list, box, where: str, shaft, mixed: bool) -> tuple:
