@@ -61,3 +61,21 @@ def test_the_gap_run_names_the_description_s_marks_not_target_s(tmp_path, cli):
     line = _error(out, err)
     assert SAID in line and MARKS in line, line
     assert "[target]" not in line and "key 'fs'" not in line, line
+
+
+def test_a_right_count_or_another_speed_with_samples_enough_is_read():
+    """The refusal at the read needs both: a speed a whole count of marks off the described, and too few samples a
+    revolution for the first mesh (19 teeth and 3 sidebands: 45). A right count reads the described speed; a shaft
+    run at half its described speed has twice the samples; a count typed 10 x over (360 for 36) reads a tenth of the
+    speed with 10 x the samples, left to the structure check, which reads the mesh lines."""
+    import pytest
+
+    from gearlab.errors import GearlabInputError
+    from gearlab.parts.measured import refuse_marks
+
+    at = ("box.toml: [sensor] key 'pulses_per_rev'", "[sensor]")
+    refuse_marks(12800.0, 40.4, (40.0, 19), 60, *at)  # the count right, 1 % over the described
+    refuse_marks(12800.0, 20.0, (40.0, 19), 60, *at)  # half the speed: 640 samples a turn
+    refuse_marks(12800.0, 4.0, (40.0, 19), 360, *at)  # 3200 a turn
+    with pytest.raises(GearlabInputError, match=r"not 6\? \(\[sensor\] pulses_per_rev = 60\)"):
+        refuse_marks(12800.0, 400.0, (40.0, 19), 6, *at)  # 32 a turn, 10 x the described
