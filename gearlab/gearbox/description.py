@@ -356,6 +356,7 @@ def speed_hz(value, where: str) -> float:
     if not 0 < value <= MAX_SPEED_HZ:
         raise GearlabInputError(
             f"{where}: expected an input-shaft speed up to 1 kHz, e.g. '25 Hz', got {value:g}{bare_speed(given)}"
+            f"{_rpm_as_hz(given, value)}"
         )
     if bare_speed(given) and value > BARE_SPEED_HZ:  # '900' meant in rpm: 54,000 rpm as read
         raise GearlabInputError(
@@ -372,6 +373,14 @@ def bare_speed(value) -> str:
     if isinstance(value, str):
         bare = re.fullmatch(r"\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*", value) is not None
     return " (a bare number is in Hz; expected a speed with its unit, e.g. '35 Hz' or '2100 rpm')" if bare else ""
+
+
+def _rpm_as_hz(given, value: float) -> str:
+    """What an out-of-bounds speed's message adds when it was written in Hz: a motor's plate gives rpm,
+    and '1470 Hz' copied from it is 1470 rpm, 24.5 Hz."""
+    if not (isinstance(given, str) and re.search(r"\d\s*(Hz|hz|1/s)\s*$", given)) or value / 60 > MAX_SPEED_HZ:
+        return ""
+    return f" (as {given.strip()!r}: rpm meant? '{value:g} rpm' is {value / 60:.4g} Hz)"
 
 
 def _module_of_pitch(value, where: str) -> str:
@@ -445,7 +454,9 @@ class _Table:
         raw = self.data[name]
         if p.integer:
             if isinstance(raw, bool) or not isinstance(raw, int):
-                raise GearlabInputError(f"{where}: expected a whole number, got {shown(raw)}")
+                # TOML reads 31.0 as a decimal, though its writer meant a whole number: say how to write it
+                written = f": write {name} = {raw:.0f}" if isinstance(raw, float) and raw.is_integer() else ""
+                raise GearlabInputError(f"{where}: expected a whole number, got {shown(raw)}{written}")
             value = raw
         else:
             value = to_si(raw, p.unit, where)
