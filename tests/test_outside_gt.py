@@ -30,3 +30,16 @@ def test_a_tooth_count_written_as_a_decimal_says_how_to_write_it(tmp_path, cli):
     line = err.strip()
     assert code == 2 and "\n" not in line and "[[stages]] #1.pinion key 'z'" in line, err
     assert "z = 31" in line and "31.0" in line, line
+
+
+def test_a_unit_key_in_capitals_names_the_symbol_it_is_not(cli, tmp_path):
+    # '--unit G' (as a DAQ's channel list writes it) read "'G' is not one of m/s^2, m/s², g, V, mV, nor another
+    # acceleration or voltage unit (e.g. 'mg', 'mm/s²')", no 'did you mean', though 'gs' and "g's" got one
+    import numpy as np
+    from scipy.io import wavfile
+
+    wavfile.write(tmp_path / "take.wav", 8192, np.zeros(8192, np.float32))
+    code, out, err = cli("inspect", tmp_path / "take.wav", "--speed", "25 Hz", "--unit", "G")
+    line = err.strip()
+    assert code == 2 and "\n" not in line and "--unit: 'G' is not one of" in line, err
+    assert "did you mean 'g'?" in line, line

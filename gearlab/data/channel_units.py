@@ -196,9 +196,16 @@ def declared_unit(value, where: str):
             )
         raise GearlabInputError(
             f"{where}: {shown(value)} is not one of {', '.join(UNITS)}, nor another acceleration or voltage unit "
-            f"(e.g. 'mg', 'mm/s²'){did_you_mean(str(value), UNITS)}"
+            f"(e.g. 'mg', 'mm/s²'){_cased(value) or did_you_mean(str(value), UNITS)}"
         )
     return read
+
+
+def _cased(value) -> str:
+    """The refusal's hint where *value* is a UNITS symbol in the wrong case ('G', 'MV'): a symbol's case is its
+    meaning, which difflib's likeness of 'G' to 'g' (none) does not see."""
+    same = [u for u in UNITS if isinstance(value, str) and value.strip().lower() == u.lower()]
+    return f" (did you mean {same[0]!r}? a unit's symbol is case-sensitive)" if same else ""
 
 
 def channel_scale(
