@@ -116,7 +116,7 @@ def read_record(path: str, options: InspectOptions) -> Recording:
         if len(left) != 1:
             raise GearlabInputError(
                 f"{path}: which channel is the vibration? the file has {channel_listing(channels)}; "
-                "expected --vibration NAME"
+                f"expected --vibration {'INDEX (0-based: 0, 1)' if ''.join(map(str, channels)).isdigit() else 'NAME'}"
             )
         vibration = left[0]
     said = name_unit(str(vibration))

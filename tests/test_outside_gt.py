@@ -43,3 +43,16 @@ def test_a_unit_key_in_capitals_names_the_symbol_it_is_not(cli, tmp_path):
     line = err.strip()
     assert code == 2 and "\n" not in line and "--unit: 'G' is not one of" in line, err
     assert "did you mean 'g'?" in line, line
+
+
+def test_a_two_channel_wav_with_no_channel_named_asks_for_its_index(cli, tmp_path):
+    # a stereo WAV of two accelerometers read "which channel is the vibration? the file has 0, 1; expected
+    # --vibration NAME": a WAV's channels have no names, only their 0-based index (as validate says it)
+    import numpy as np
+    from scipy.io import wavfile
+
+    wavfile.write(tmp_path / "two.wav", 8192, np.zeros((8192, 2), np.float32))
+    code, out, err = cli("inspect", tmp_path / "two.wav", "--speed", "25 Hz")
+    line = err.strip()
+    assert code == 2 and "\n" not in line and "the file has 0, 1" in line, err
+    assert "--vibration INDEX (0-based: 0, 1)" in line, line
