@@ -10,8 +10,11 @@ from scipy.signal import hilbert
 
 from gearlab.signals import fft
 
+# the last: a prime above fft.MATMUL times small factors (its columns by numpy)
+LENGTHS = [4096, 3 * 5 * 4096, 2399, 131 * 4096, 131 * 256 * 3, 67 * 101, 2 * 67 * 101, 599 * 64 * 3]
 
-@pytest.mark.parametrize("n", [4096, 3 * 5 * 4096, 2399, 131 * 4096, 131 * 256 * 3, 67 * 101, 2 * 67 * 101])
+
+@pytest.mark.parametrize("n", LENGTHS)
 def test_the_split_transforms_are_numpy_s_and_scipy_s_to_round_off(n):
     x = np.random.default_rng(n).standard_normal(n)
     X = np.fft.fft(x)

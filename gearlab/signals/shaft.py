@@ -28,6 +28,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..errors import GearlabInputError
+from .fft import rfft
 from .pipeline import POINTS
 
 UPSAMPLE = 2  # a record read 2 x denser before the cubic interpolation (module doc)
@@ -69,14 +70,25 @@ def read_at(
     dense_length(n up) points the interpolation is made in (its values are overwritten), so that readings of one
     record reuse one (shaft_averages: a fresh array of a long record's reading is a tenth of its time in page
     faults)."""
-    from .grid import read_cubic
+    return read_dense(denser(spectrum, n, up, dense), n, at)
 
+
+def denser(spectrum: np.ndarray, n: int, up: int = UPSAMPLE, dense: np.ndarray | None = None) -> np.ndarray:
+    """read_at's band-limited interpolation of the n samples whose rfft is *spectrum*, at least *up* times denser
+    (in *dense* where given)."""
     fine = dense_length(n * up)
     wave = np.fft.irfft(spectrum, n=fine, out=dense)
     wave *= fine / n  # in place: no second dense array
+    return wave
+
+
+def read_dense(wave: np.ndarray, n: int, at: np.ndarray) -> np.ndarray:
+    """read_at's cubic reading at sample positions *at* of *wave*, denser's interpolation of n samples."""
+    from .grid import read_cubic
+
     flat = np.ascontiguousarray(at, dtype=np.float64).reshape(-1)
     out = np.empty(flat.size)
-    read_cubic(flat, fine / n, wave, out)
+    read_cubic(flat, wave.size / n, wave, out)
     return out.reshape(np.shape(at))
 
 
@@ -102,20 +114,19 @@ def without_input_orders(revs: np.ndarray, p: int) -> np.ndarray:
     return revs - np.fft.irfft(F, n=revs.shape[-1])
 
 
-def on_turns(y: np.ndarray, at: np.ndarray, dense: np.ndarray | None = None) -> np.ndarray:
+def on_turns(y: np.ndarray, at: np.ndarray, dense: np.ndarray | None = None, wave=None) -> np.ndarray:
     """Consecutive input revolutions *y* (flat) read at a shaft's grid *at* (sample positions): the samples
     themselves where the grid falls on them (the input shaft), else read_at's band-limited reading. Linear
     interpolation between y's own samples left images (size o - P) + k input orders away from a line at k
     (a shaft of o input turns cut into `size` points a turn), which every turn repeats where o = 1/q: the
     PHM 2009 rig's idler (o = 1/3) read its 3rd mesh harmonic's image 43 dB below it, a 1/7 shaft's lands
     at 585 + k; read_at's: below -130 dB (tests/test_shaft_reading.py). *dense*: read_at's. The spectrum is
-    gearlab.signals.fft's: R revolutions' R x 4096 samples, R prime (a 60 s take's 2399: 0.26 s an rfft, 93 a take)."""
-    from .fft import rfft
-
+    gearlab.signals.fft's: R revolutions' R x 4096 samples, R prime (a 60 s take's 2399: 0.26 s an rfft, 93 a take).
+    *wave*: a function giving y's denser reading, where several shafts read the same y (made once)."""
     head = at.reshape(-1)[:64]  # a slower shaft's grid leaves the samples within a few points: no whole pass
     if np.array_equal(head, np.round(head)) and np.array_equal(at, whole := np.round(at)):
         return y[whole.astype(np.int64)]
-    return read_at(rfft(y), y.size, at, dense=dense)
+    return read_dense(denser(rfft(y), y.size, dense=dense) if wave is None else wave(), y.size, at)
 
 
 def uniform_filter1d(x: np.ndarray, size: int, mode: str) -> np.ndarray:
@@ -214,9 +225,12 @@ def shaft_averages(y: np.ndarray, lay, first: int, R: int, sweeps: int) -> tuple
                 left = left - at_samples(r, s) if left is y else np.subtract(left, at_samples(r, s), out=left)
         return on_turns(left, cut[s][0], dense)
 
+    # sweeps 0: every slower shaft reads the record itself, so its spectrum and denser reading are made once (a
+    # template's 260-revolution record: 3 transforms and readings of 2 M points to 1)
+    record = lru_cache(maxsize=1)(lambda: denser(rfft(y), y.size, dense=dense))
     for sweep in range(max(sweeps, 1)):
         for s in shafts:
-            segments = less_others(s) if sweeps else on_turns(y, cut[s][0], dense)
+            segments = less_others(s) if sweeps else on_turns(y, cut[s][0], dense, record)
             waves[s] = segments.mean(axis=0)
             for key in [k for k in read if k[0] == s]:  # s's readings were of its previous average
                 del read[key]
