@@ -85,7 +85,8 @@ def test_a_run_saved_before_the_bands_were_read_reads_the_whole_residual_as_then
     found = W.which_gear(t, dataclasses.replace(hist, envelope=then), table, None)
     assert "demodulated in the whole residual" in found["method"], found["method"]
     # the whole residual's envelope localised as before the bands: signals.localise against its own history
-    alone = L.localise(E.envelope(t.revolutions, table), whole, table, t.first % int(table.train_period))
+    first = t.first % int(table.train_period) + E.sound(len(t.revolutions), table)[0]  # the envelope's first turn
+    alone = L.localise(E.envelope(t.revolutions, table), whole, table, first)
     ev = {s["shaft"]: s["z"] for s in found["shafts"]}
     assert ev == {e.shaft: e.z for e in alone.ranking}
     assert found["named"] == PINION, found["summary"]
