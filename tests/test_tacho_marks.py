@@ -74,8 +74,13 @@ def test_a_right_count_or_another_speed_with_samples_enough_is_read():
     from gearlab.parts.measured import refuse_marks
 
     at = ("box.toml: [sensor] key 'pulses_per_rev'", "[sensor]")
-    refuse_marks(12800.0, 40.4, (40.0, 19), 60, *at)  # the count right, 1 % over the described
-    refuse_marks(12800.0, 20.0, (40.0, 19), 60, *at)  # half the speed: 640 samples a turn
-    refuse_marks(12800.0, 4.0, (40.0, 19), 360, *at)  # 3200 a turn
+    refuse_marks(12800.0, 40.4, (40.0, 19, ()), 60, *at)  # the count right, 1 % over the described
+    refuse_marks(12800.0, 20.0, (40.0, 19, ()), 60, *at)  # half the speed: 640 samples a turn
+    refuse_marks(12800.0, 4.0, (40.0, 19, ()), 360, *at)  # 3200 a turn
     with pytest.raises(GearlabInputError, match=r"not 6\? \(\[sensor\] pulses_per_rev = 60\)"):
-        refuse_marks(12800.0, 400.0, (40.0, 19), 6, *at)  # 32 a turn, 10 x the described
+        refuse_marks(12800.0, 400.0, (40.0, 19, ()), 6, *at)  # 32 a turn, 10 x the described
+    # a speed 12.34 x the described, one mark a turn: 12 marks typed as 1, unless the description has two shafts
+    # turning 12.34 : 1 (a tacho on the input read as on the output: the structure check names its shaft)
+    with pytest.raises(GearlabInputError, match=r"not 1\? \(\[sensor\] pulses_per_rev = 12\)"):
+        refuse_marks(12800.0, 493.6, (40.0, 19, ()), 1, *at)
+    refuse_marks(12800.0, 493.6, (40.0, 19, (12.34, 1 / 12.34)), 1, *at)

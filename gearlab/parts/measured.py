@@ -394,7 +394,7 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
         keys["unit"],
         shaft,
         settle_turns(box),
-        () if box is None or not box.speed_hz else (box.speed_hz, box.stages[0].pinion.z),
+        () if box is None or not box.speed_hz else (box.speed_hz, box.stages[0].pinion.z, shaft_ratios(box)),
         tuple(pulses_at(f, q, t, box, where) for f, q in zip(files, tachos) if q is not None),
     )
 
@@ -411,17 +411,32 @@ def pulses_at(f: TargetFile, tacho, t: dict, box, where: str) -> tuple:
 
 def refuse_marks(fs: float, speed: float, described: tuple, ppr: int, where: str, table: str) -> None:
     """Refuse a record read at a tacho's *speed* a whole count of marks off the *described* (input speed in Hz, the
-    first pinion's teeth) with too few samples a revolution for that mesh (*fs* / *speed*): its count typed a
-    factor off (inspect_tacho.speed_marks_line, naming *where* in *table*), not the sampling rate, and before
-    the record is cut into that many revolutions (a 60-mark encoder typed as 6: 10 x the revolutions, minutes a
-    take)."""
+    first pinion's teeth, its shafts' ratios) with too few samples a revolution for that mesh (*fs* / *speed*): its
+    count typed a factor off (inspect_tacho.speed_marks_line, naming *where* in *table*), not the sampling rate, and
+    before the record is cut into that many revolutions (a 60-mark encoder typed as 6: 10 x the revolutions, minutes
+    a take)."""
     from ..gap.structure import SIDEBANDS
     from ..inspect_tacho import speed_marks_line
 
-    hz, z1 = described
+    hz, z1, ratios = described
+    # a tacho on another shaft than the one it is read as reads the speed by a ratio of two shafts' turns (19/62 x
+    # 23/87: 12.34, not 12 marks): the structure check names that shaft (inspect_tacho.elsewhere_line)
+    if any(abs(speed / hz / r - 1) < SHAFT_RATIO_TOL for r in ratios):
+        return
     line = speed_marks_line(speed, hz, ppr, where, table)
     if line and fs / speed < 2 * (z1 + SIDEBANDS) + 1:  # the gap's need (gap_inputs.check_points)
         raise GearlabInputError(line)
+
+
+SHAFT_RATIO_TOL = 0.01  # a speed read a shaft ratio off within this: the tacho's shaft, not its count of marks
+
+
+def shaft_ratios(box) -> tuple[float, ...]:
+    """Every ratio of two different shafts' turns of the description *box* (refuse_marks)."""
+    from ..gearbox.orders import order_table
+
+    turns = [float(o) for o in order_table(box).shaft_orders]
+    return tuple(a / b for a in turns for b in turns if abs(a / b - 1) > SHAFT_RATIO_TOL)
 
 
 def own_shafts(files: tuple[TargetFile, ...], tachos: list, box, where: str, shaft, mixed: bool) -> tuple:
