@@ -15,9 +15,9 @@ def level_warnings(cond: dict) -> list[str]:
     """A line (level_line) for each test record of *cond* (its "history" and "test": (file, revolutions in m/s²))
     whose standard deviation is more than LEVEL_OFF off the median of its history records' (another load, a gain
     left out)."""
-    std = {f.path: float(np.std(r)) for f, r in cond["history"] + cond["test"]}
-    typical = float(np.median([std[f.path] for f, _ in cond["history"]]))
-    lines = {f.path: level_line(std[f.path] / typical if typical > 0 else 1.0) for f, _ in cond["test"]}
+    std = {f.path: take_level(r) for f, r in cond["history"] + cond["test"]}
+    typical = history_level([r for _, r in cond["history"]])
+    lines = {f.path: level_line(level_ratio(std[f.path], typical)) for f, _ in cond["test"]}
     said = [f"{path}: {line}" for path, line in lines.items() if line]
     # the history's own records at two loads: NA4's record-level threshold spans them (the 25/52 + 16/81 box's
     # history at 1 and 1.5 x: 259, its 16T chip's takes at 20-100 uncalled)
@@ -80,14 +80,32 @@ def level_spread(levels) -> float | None:
     return float(np.max(np.abs(np.log(levels / typical)))) if typical > 0 and np.all(levels > 0) else 0.0
 
 
-def run_levels(cond: dict) -> tuple[dict[str, float], float | None]:
-    """Of a run's condition *cond* (its "history" and "test": (file, revolutions in m/s²)): each test take's level
-    over its history's median (as level_warnings reads it), and the history's level_spread: what called_levels
-    reads once the run's methods have called the takes (kept in conditions.json)."""
-    history = [float(np.std(r)) for _, r in cond["history"]]
-    typical = float(np.median(history))
-    ratios = {f.path: float(np.std(r)) / typical if typical > 0 else 1.0 for f, r in cond["test"]}
-    return ratios, level_spread(history)
+def take_level(revs) -> float:
+    """A take's level: the standard deviation of its revolutions in m/s² as read (spikes bridged; before its units'
+    shaft, the standardiser and the alignment), the one measure a run's tables and `gearlab score` compare."""
+    return float(np.std(revs))
+
+
+def history_level(history) -> float:
+    """The level a take's is compared with: the median take_level of a condition's *history* takes (revolutions
+    each), kept in scoring.json ('level_reference') for `gearlab score`; a median, as one take at another load
+    moves a pooled standard deviation (the standardiser's) by its own level and its mean."""
+    return float(np.median([take_level(r) for r in history]))
+
+
+def level_ratio(level: float, reference: float) -> float:
+    """A take's *level* (take_level) over its history's *reference* (history_level); 1 where the history is
+    silent."""
+    return level / reference if reference > 0 else 1.0
+
+
+def run_levels(cond: dict) -> tuple[dict[str, float], float | None, float]:
+    """Of a run's condition *cond* (its "history" and "test": (file, revolutions in m/s²)): each test take's
+    level_ratio (as level_warnings reads it), the history's level_spread (what called_levels reads once the run's
+    methods have called the takes; both kept in conditions.json) and its history_level (kept for gearlab score)."""
+    typical = history_level([r for _, r in cond["history"]])
+    ratios = {f.path: level_ratio(take_level(r), typical) for f, r in cond["test"]}
+    return ratios, level_spread([take_level(r) for _, r in cond["history"]]), typical
 
 
 def most_called(scores, threshold: float) -> bool:

@@ -403,7 +403,7 @@ def read_target(
         ]
         # and each take's millivolts read as volts, or volts as millivolts (channel_units.level_hint)
         cond["warnings"] += level_warnings(cond)
-        cond["level_ratio"], cond["level_spread"] = run_levels(cond)  # the level said of a called take
+        cond["level_ratio"], cond["level_spread"], cond["level_reference"] = run_levels(cond)  # said of a called take
         taken = [(f.path, records[f.path].units) for f, _ in cond["history"] + cond["test"]]
         cond["warnings"] += [f"{p}: {u.split('; ')[-1]}" for p, u in taken if TOO_LOUD in u or TOO_QUIET in u]
         cond["warnings"] += [f"{p}: {w}" for p, _ in taken for w in records[p].warnings]  # clipped, a dropout, a drift

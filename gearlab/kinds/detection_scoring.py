@@ -44,7 +44,17 @@ from .detection_fit import (
 )
 from .detection_in_band import IN_BAND, span, stretch, too_narrow
 from .detection_in_band import in_band as shared_in_band
-from .detection_level import called_level, clipped_call, level_line, level_spread, most_called, reversed_call
+from .detection_level import (
+    called_level,
+    clipped_call,
+    history_level,
+    level_line,
+    level_ratio,
+    level_spread,
+    most_called,
+    reversed_call,
+    take_level,
+)
 from .detection_own import (
     asked_off,
     by_level,
@@ -92,6 +102,13 @@ from .scoring_gain import full_scale_elsewhere
 # Bump it with every change of what they see.
 INPUT_VERSION = 3
 # what each version did to a later mesh of no whole input order, for the refusal's line
+# said of a run saved before scoring.json kept its history's level (level_reference)
+OLD_LEVEL = (
+    "a run saved before it kept its history's level: a take's level ratio is read off the stored history (its "
+    "units' revolutions, standardised in float32), which may differ from the run's own table near the level-change "
+    "limit; run the scenario again to keep it"
+)
+
 LATER_INPUT = {
     1: "zeroed at the whole orders beside it",
     2: "fitted out of each revolution turned on itself",
@@ -153,6 +170,7 @@ def store_scoring(run: RunDir, spec: Spec, conditions: dict) -> None:
             "max_order": cond["max_order"],
             "unit_max_order": cond["unit_max_order"],
             "history": [[f.path, len(r)] for f, r in cond["history"]],
+            "level_reference": cond["level_reference"],  # its takes' median level in m/s² (history_level)
         }
     run.write_json(scoring.SCORING_FILE, out)
 
@@ -258,17 +276,22 @@ def _ratio(shaft) -> list[int]:
 
 
 def _scoring_condition(
-    run: RunDir, meta: dict, name: str, records: list[tuple[TargetFile, np.ndarray]], marks: dict | None = None
+    run: RunDir, meta: dict, name: str, records: list[tuple[TargetFile, np.ndarray]], levels: dict, marks=None
 ) -> dict:
     """A condition as read_target makes it, from the stored history and the new *records*
-    (standardised and aligned as the run's records were; *marks*: {path: the input angles a record's first
-    tacho mark may find it at} where its own tacho shaft or marks a turn are not the run's)."""
+    (standardised and aligned as the run's records were; *levels*: {path: its take_level, read as the run read
+    its takes'}; *marks*: {path: the input angles a record's first tacho mark may find it at} where its own tacho
+    shaft or marks a turn are not the run's)."""
     c = meta["conditions"][name]
     arrays = scoring.load_arrays(run.file("scoring", c["file"]))
-    # a history saved at other points a revolution (an older gearlab's records): the takes read on its grid
-    records = [(f, at_points(revs, arrays["history"].shape[1])) for f, revs in records]
     standardiser = Standardiser(*(float(v) for v in arrays["standardiser"]))
     parts = np.split(arrays["history"], np.cumsum([n for _, n in c["history"]])[:-1])
+    typical, old = c.get("level_reference"), ""
+    if typical is None:  # a run saved before it kept it: its stored history's takes, in m/s² again, said so
+        typical, old = history_level(parts) * standardiser.std, OLD_LEVEL
+    ratio = {f.path: level_ratio(levels[f.path], typical) for f, _ in records}
+    # a history saved at other points a revolution (an older gearlab's records): the takes read on its grid
+    records = [(f, at_points(revs, arrays["history"].shape[1])) for f, revs in records]
     history = [(TargetFile(path, path, "history", "", name), revs) for (path, _), revs in zip(c["history"], parts)]
     keys = meta["target"]
     # a run from before "marks" was kept aligned at the [target]'s marks alone
@@ -296,14 +319,14 @@ def _scoring_condition(
         "test_units": {f.path: unit_sets(r, blocks, False) for f, r in test},
         "levels": {  # another load? a take reversed against the history (by the marks or, no tacho, any turn)?
             f.path: "; ".join(  # or turned off its marks (the box running the other way)?
-                w for w in (level_line(float(np.std(r)) / standardiser.std), turned_line(t, reference, not tacho)) if w
+                w for w in (level_line(ratio[f.path]), old, turned_line(t, reference, not tacho)) if w
             )
             for (f, r), (_, t) in zip(records, test)
         },
         # read off its tacho's marks, not reversed (the box running the other way?): its tooth, turned_tooth's, at so
         # many marks a turn
         "turned": {f.path: at[f.path] for f, t in test if read_off_mark(t, reference, not tacho)},
-        "level_ratio": {f.path: float(np.std(r)) / standardiser.std for f, r in records},
+        "level_ratio": ratio,  # the run's measure (take_level over history_level), its reference as the run kept it
         # how far the history's own takes lie off their median level (the largest |log|; its revolutions as stored,
         # their scale not the standardiser's): a take further off, called with no gear named, is told its level
         # whatever LEVEL_OFF says (called_level)
@@ -499,6 +522,7 @@ def score(
     # a bad --key or a missing condition: refused before any file is read
     reading_keys(meta, condition, given, box=described)
     cut, raw, found, marks, chosen, far, takes = {}, {}, {}, {}, {}, {}, own_conditions(run)
+    levels: dict[str, float] = {}  # {file: its take_level, read as the run read its takes'}
     skipped: dict[str, str] = {}  # {file: why} of the takes refused, of several given
     history: dict = {}  # {condition: its history's stages as inspect reads them (history_stages)}
     for i, file in enumerate(files):
@@ -546,6 +570,7 @@ def score(
             if meta.get("spikes_out", False):  # the run's units: a sensor's isolated spikes bridged
                 turns = meta["unit_shaft"][1] / meta["unit_shaft"][2] if "unit_shaft" in meta else 1.0
                 revs = without_spikes(revs, rec.fs, rec.speed_hz, turns)
+            levels[str(file)] = take_level(revs)  # before the units' shaft, as the run's (run_levels)
             if "unit_shaft" in meta:  # the run's units: revolutions of the watched gear's shaft, in its band
                 _, p, q = meta["unit_shaft"]
                 band = meta["conditions"][name]["max_order"]
@@ -584,7 +609,7 @@ def score(
     if not cut:  # every take refused: as one take is, in one line (each alone says its own why), nothing written
         first, why = next(iter(skipped.items()))
         raise GearlabInputError(f"none of the {len(files)} takes scored ({', '.join(skipped)}); {first}: {why}")
-    conds = {name: _scoring_condition(run, meta, name, records, marks) for name, records in cut.items()}
+    conds = {name: _scoring_condition(run, meta, name, records, levels, marks) for name, records in cut.items()}
     turned = {p: m for c in conds.values() for p, m in c["turned"].items()}  # read off their marks: the tooth so
     localised = localise_scored(run, raw, turned)  # which gear each record's change is on (detection_which_gear)
     localised.update({p: not_read(w) for p, w in far.items() if w and described is not None})  # far off: not read
@@ -644,6 +669,7 @@ def score(
                             "flaws": list(found[f.path][6]),  # what its acquisition did: clipped, a dropout, a drift
                             "digest": found[f.path][7],  # its content: scored again or renamed, one take of the history
                             "level": cond["levels"][f.path],  # off its history's: another load (level_warnings)
+                            "level_ratio": cond["level_ratio"][f.path],  # the run's table's measure (run_levels)
                             # its thresholds of one history take, as the run's verdict says it (one_take)
                             "history": one_take(name, [(r.get("history_models") or {}).get(u)]),
                             "localised": where.get("named"),
