@@ -13,7 +13,7 @@ import pytest
 from detection_scenario import scenario, shared_run
 from textrecords import signals, text, write_zip
 
-from gearlab.kinds.detection_scoring import OLD_LEVEL
+from gearlab.kinds.detection_level import OLD_LEVEL
 from gearlab.kinds.detection_which_gear import is_level_change
 from gearlab.parts import scoring
 

@@ -99,6 +99,23 @@ def level_ratio(level: float, reference: float) -> float:
     return level / reference if reference > 0 else 1.0
 
 
+# said of a run saved before scoring.json kept its history's level (level_reference)
+OLD_LEVEL = (
+    "a run saved before it kept its history's level: a take's level ratio is read off the stored history (its "
+    "units' revolutions, standardised in float32), which may differ from the run's own table near the level-change "
+    "limit; run the scenario again to keep it"
+)
+
+
+def kept_level(kept: dict, history, scale: float) -> tuple[float, str]:
+    """(the history_level a take's level is compared with, "" or OLD_LEVEL): scoring.json's condition *kept* its
+    'level_reference'; a run saved before: its stored *history* takes (standardised) times the standardiser's
+    *scale*, said so."""
+    if kept.get("level_reference") is not None:
+        return kept["level_reference"], ""
+    return history_level(history) * scale, OLD_LEVEL
+
+
 def run_levels(cond: dict) -> tuple[dict[str, float], float | None, float]:
     """Of a run's condition *cond* (its "history" and "test": (file, revolutions in m/s²)): each test take's
     level_ratio (as level_warnings reads it), the history's level_spread (what called_levels reads once the run's

@@ -15,6 +15,7 @@ from ..parts import scoring
 from ..runs import RunDir, input_digest
 from .common import SPEED_GROUP
 from .detection_in_band import IN_BAND
+from .detection_level import kept_level, level_ratio, take_level
 
 # condition_by's words for a take of the run's own (the printout and the scoring history say them)
 OWN_WORDS = "the run's own"
@@ -86,18 +87,22 @@ def condition_of(meta: dict, path: str, speed: float, asked: str | None) -> str:
 
 def by_level(run: RunDir, meta: dict, name: str, rec) -> tuple[str, str]:
     """(condition, why) of a steady take: of the conditions whose history runs within IN_BAND of its speed (one
-    per load, grouped by hand), the one whose history level is nearest the take's; by speed alone a 29/73 box's
+    per load, grouped by hand), the one whose history level is nearest the take's (level_ratio, as the run's tables
+    and the take's rows measure it); by speed alone a 29/73 box's
     heavy-load history take was scored against the light load's (24.41 Hz to 24.40): NA4 6 of 6 'fault'."""
     at = [c for c, v in meta["conditions"].items() if abs(rec.speed_hz - v["speed_hz"]) <= IN_BAND * v["speed_hz"]]
     if len(at) < 2:
         return name, ""
-    std = float(np.std(rec.revolutions))
-    level = {
-        c: std / float(scoring.load_arrays(run.file("scoring", meta["conditions"][c]["file"]))["standardiser"][1])
-        for c in at
-    }
+    level = {c: level_ratio(take_level(rec.revolutions), _kept(run, meta["conditions"][c])) for c in at}
     best = min(at, key=lambda c: abs(math.log(max(level[c], 1e-12))))
     return best, "nearest level of those at its speed: " + ", ".join(f"'{c}' {level[c]:.2f} x" for c in at)
+
+
+def _kept(run: RunDir, kept: dict) -> float:
+    """A condition's history level (kept_level), as `gearlab score` compares a take's with it."""
+    arrays = scoring.load_arrays(run.file("scoring", kept["file"]))
+    parts = np.split(arrays["history"], np.cumsum([n for _, n in kept["history"]])[:-1])
+    return kept_level(kept, parts, float(arrays["standardiser"][1]))[0]
 
 
 def refused_why(path: str, refused: GearlabInputError) -> str:

@@ -47,7 +47,7 @@ from .detection_in_band import in_band as shared_in_band
 from .detection_level import (
     called_level,
     clipped_call,
-    history_level,
+    kept_level,
     level_line,
     level_ratio,
     level_spread,
@@ -102,13 +102,6 @@ from .scoring_gain import full_scale_elsewhere
 # Bump it with every change of what they see.
 INPUT_VERSION = 3
 # what each version did to a later mesh of no whole input order, for the refusal's line
-# said of a run saved before scoring.json kept its history's level (level_reference)
-OLD_LEVEL = (
-    "a run saved before it kept its history's level: a take's level ratio is read off the stored history (its "
-    "units' revolutions, standardised in float32), which may differ from the run's own table near the level-change "
-    "limit; run the scenario again to keep it"
-)
-
 LATER_INPUT = {
     1: "zeroed at the whole orders beside it",
     2: "fitted out of each revolution turned on itself",
@@ -286,9 +279,7 @@ def _scoring_condition(
     arrays = scoring.load_arrays(run.file("scoring", c["file"]))
     standardiser = Standardiser(*(float(v) for v in arrays["standardiser"]))
     parts = np.split(arrays["history"], np.cumsum([n for _, n in c["history"]])[:-1])
-    typical, old = c.get("level_reference"), ""
-    if typical is None:  # a run saved before it kept it: its stored history's takes, in m/s² again, said so
-        typical, old = history_level(parts) * standardiser.std, OLD_LEVEL
+    typical, old = kept_level(c, parts, standardiser.std)
     ratio = {f.path: level_ratio(levels[f.path], typical) for f, _ in records}
     # a history saved at other points a revolution (an older gearlab's records): the takes read on its grid
     records = [(f, at_points(revs, arrays["history"].shape[1])) for f, revs in records]
