@@ -28,7 +28,7 @@ import numpy as np
 from ..gearbox.match import MIN_TEETH, OFF_COMB, ON_MESH, STRONGEST, tacho_elsewhere, tacho_shaft_words
 from ..gearbox.speed import TEETH_AGREE
 from ..inspect_tacho import marks_words
-from .structure_later import _lines, _PairDescription, later_stages, wheel_line
+from .structure_later import Spectra, _lines, _PairDescription, later_stages, wheel_line
 from .structure_later import _outshone as _outshone  # where tests/test_outside_user reads it
 
 # A target whose strongest lines (STRONGEST, above order MIN_TEETH) hold at least this share of their
@@ -64,7 +64,14 @@ def _comb_distance(x: np.ndarray, z: float, offsets: list[float]) -> np.ndarray:
 
 
 def mesh_check(
-    target: np.ndarray, z1: int, z2: int, max_order: int = 0, later: tuple = (), tacho=None, on_input: bool = True
+    target: np.ndarray,
+    z1: int,
+    z2: int,
+    max_order: int = 0,
+    later: tuple = (),
+    tacho=None,
+    on_input: bool = True,
+    spectra: Spectra | None = None,
 ) -> dict:
     """The target's mesh order against the source's Z1 (module doc): {'expected', 'measured' (the
     target's mesh order, or None when its lines do not show one), 'off_comb' (share of the strongest
@@ -74,15 +81,14 @@ def mesh_check(
     (the source's order table, the shaft the target's tacho was read as, the target's speed over the
     described): a tacho on another shaft (match.tacho_elsewhere) is told first. *on_input*: the
     revolutions are the input shaft's turns (its order is 1, not read off its sidebands: a tacho there,
-    or a simulation); a tacho on another shaft makes them its turns times the described ratio."""
+    or a simulation); a tacho on another shaft makes them its turns times the described ratio. *spectra*: the
+    structure check's readings (structure_later.Spectra), or None."""
     from ..gearbox.match import check_description, tol_mesh
-    from ..gearbox.speed import THRESHOLD_DB, find_lines
-    from ..signals import spectrum
 
-    n, points = target.shape
-    orders, amp = spectrum(np.asarray(target, dtype=np.float64).reshape(-1), points)
-    top = 0.9 * (min(max_order, points // 2) if max_order else points // 2)
-    lines = find_lines(orders, amp, THRESHOLD_DB, 1.5 / n, top)
+    spectra = spectra or Spectra()
+    n = target.shape[0]
+    orders, amp = spectra.spectrum(target)
+    lines = spectra.lines(target, max_order)
     # the later stages' lines are no sidebands of the first (their shafts but the first wheel's)
     beyond = [(mesh, shafts[1:] if i == 0 else shafts) for i, (mesh, shafts) in enumerate(later)]
     check = check_description(
@@ -392,7 +398,14 @@ def _tacho_read(chain, pair) -> tuple | None:
 
 
 def structure_line(
-    target, pair, max_order: int, chain, plain, record: dict, pulses_per_rev: int | None = None
+    target,
+    pair,
+    max_order: int,
+    chain,
+    plain,
+    record: dict,
+    pulses_per_rev: int | None = None,
+    spectra: Spectra | None = None,
 ) -> str | None:
     """The one line of the first tooth-count difference between *pair*'s train and the target's
     revolutions (*target*, input-shaft revolutions at uniform angle, read up to *max_order*), or None;
@@ -403,7 +416,9 @@ def structure_line(
     stage is read; None: against the description's orders). The gap
     diagnosis's structure check (first_difference) and the detection kind's check of its history
     records (gearlab.kinds.detection_records.check_structure). *pulses_per_rev*: the marks a turn the tacho was
-    read with (None: not known; a misread count is then told as a share of them)."""
+    read with (None: not known; a misread count is then told as a share of them). *spectra*: the check's readings
+    of the revolutions (structure_later.Spectra: each history's spectrum taken once), or None for its own."""
+    spectra = spectra or Spectra()
     # records whose speed the description's mesh lines gave, the source set to it: revolutions cut
     # at that speed show the described mesh order whatever the teeth (a 14-tooth pinion at 45 Hz
     # described with 15 read at 42 Hz, 'unexplained'); a speed off the described one by a whole
@@ -416,11 +431,11 @@ def structure_line(
         # comb said 'the pinion shows 39.5 teeth')
         # the count those lines show before the one nearest the nominal speed (25 teeth at 33.09 Hz described with 24
         # at 32.4 Hz: 34.47 Hz read, 6.4 % off; 26 teeth at 31.82 Hz lie nearer 32.4 Hz than 25 at 33.09 Hz)
-        shown = _input_count(_longest(target, chain), pair, max_order, chain, chain.described_speed)[1]
+        shown = _input_count(_longest(target, chain), pair, max_order, chain, chain.described_speed, spectra)[1]
         teeth = shown if shown not in (None, pair.Z1) else traded_teeth(chain.speed, chain.described_speed, pair.Z1)
         teeth = teeth or _beyond_slip(chain.speed, chain.described_speed, pair.Z1)
         if teeth is not None:
-            return _traded_line(target, pair, max_order, chain, teeth, record, shown)
+            return _traded_line(target, pair, max_order, chain, teeth, record, shown, spectra)
     # a tacho on another shaft than the input, or a speed found from the mesh lines: the input's order is
     # read off its sidebands, as inspect reads it (a 23/61 fan's output tacho, described 24/61: the mesh
     # at 24 by the described ratio, the input's sidebands 24/23 apart; inspect said '23.0 teeth', detection
@@ -429,7 +444,7 @@ def structure_line(
     on_input = chain is None or (chain.tacho_shaft or (None if chain.speed_from_mesh else input_shaft)) == input_shaft
     tacho = _tacho_read(chain, pair)
     takes = _takes(target, chain)
-    whole = mesh_check(target, pair.Z1, pair.Z2, max_order, later_combs(pair), tacho, on_input)
+    whole = mesh_check(target, pair.Z1, pair.Z2, max_order, later_combs(pair), tacho, on_input, spectra)
     # record['mesh'] is the reading the line (or the pass) was decided on, 'read_on' says which
     laid = {"read_on": "records laid end to end" if takes else "all revolutions", "revolutions": len(target)}
     record["mesh"] = whole | laid
@@ -439,24 +454,24 @@ def structure_line(
     # mesh_check's shaft alone and marks alone miss (a 19/47 + 29/71 reducer's 1-mark output tacho read as the
     # input's 2: 12.11 x, 'stage 1 pinion: 230 teeth fit the recording'); read as inspect reads it,
     # on all revolutions as mesh_check's shaft alone, before the gears
-    if tacho is not None and (line := _misread_line(target, pair, max_order, tacho, pulses_per_rev, record)):
+    if tacho is not None and (line := _misread_line(target, pair, max_order, tacho, pulses_per_rev, record, spectra)):
         return line
     # a slower shaft's sidebands within one record (the longest): records laid end to end are in register
     # on the input shaft only (a 13/81 fan's three takes of 228 turns: 'the wheel shows 80.3 ± 0.6 teeth')
     one = _longest(target, chain)
-    mesh = mesh_check(one, pair.Z1, pair.Z2, max_order, later_combs(pair), tacho, on_input) if takes else whole
+    mesh = mesh_check(one, pair.Z1, pair.Z2, max_order, later_combs(pair), tacho, on_input, spectra) if takes else whole
     if takes:  # summary.json showed the records laid end to end (89.4 ± 0.7) where the line read 89.0 ± 1.8
         record["mesh"] = mesh | {"read_on": f"the longest of {len(takes)} records", "revolutions": len(one)}
     # any tacho's shaft, the input's too (a 38/89 + 48/95 described for 49/95 read 'stage 2: mesh order 20.92
     # measured ... or a wheel upstream, differs' with an input tacho, 'stage 2 pinion: 49 teeth fit' with an output one)
-    if tacho is not None and (line := outward_line(one, pair, max_order, tacho[1], record)):
+    if tacho is not None and (line := outward_line(one, pair, max_order, tacho[1], record, spectra)):
         return line
     # no tacho, the input's mesh where described: the stages as inspect reads such a record (its shaft's order
     # not 1 by fiat), outward from the input; a later gear one tooth off is that gear, not another mesh order
     # (68/103 + 82/99 described 68/104: 'mesh order 54.1 measured, 68 expected ... 20.4 % off', inspect named
     # the 103-tooth wheel)
     no_tacho = chain is not None and not chain.tacho_shaft  # a declared speed's too: refined on the mesh lines
-    if no_tacho and (line := _no_tacho_line(one, pair, max_order, record)):
+    if no_tacho and (line := _no_tacho_line(one, pair, max_order, record, spectra)):
         return line
     if whole["differs"]:  # the input's mesh: records laid end to end are in register on its shaft
         record["mesh"] = whole | laid
@@ -467,7 +482,7 @@ def structure_line(
     line = (None if on_input else wheel_line(mesh, pair.Z1, "pinion")) or wheel_line(mesh, pair.Z2)
     if line:
         return line
-    later = later_stages(target, plain() if callable(plain) else plain, pair, max_order)
+    later = later_stages(target, plain() if callable(plain) else plain, pair, max_order, spectra)
     if later["stages"]:
         record["later_stages"] = later["stages"]
     if later["line"]:
@@ -477,7 +492,7 @@ def structure_line(
     # 43/89 described with 88 teeth, three records of ~52 turns: inspect 'not checked ... need 103', the gap
     # 'unexplained', the wheel unsaid), a shaft whose order no sideband shows (its wheel checked only through a
     # later mesh: inspect said so, the gap's verdict did not)
-    if unresolved := _inspect_unchecked(target, pair, max_order, on_input, tacho):
+    if unresolved := _inspect_unchecked(target, pair, max_order, on_input, tacho, spectra):
         record["unchecked"] = unchecked_record(unresolved, takes)
     return None
 
@@ -494,7 +509,7 @@ def _longest(target, chain):
     return target[sum(takes[: (k := int(np.argmax(takes)))]) : sum(takes[: k + 1])] if takes else target
 
 
-def _input_count(target, pair, max_order: int, chain, declared: float) -> tuple:
+def _input_count(target, pair, max_order: int, chain, declared: float, spectra: Spectra | None = None) -> tuple:
     """gearbox.pinion_count.pinion_evidence of *target*'s revolutions read at the speed found from the mesh lines
     (*chain*.speed), as inspect reads a record without a tacho: (the first mesh's line in Hz, the pinion count the
     input shaft's own lines show or None, [(z, Hz)] of the other counts the line allows near *declared*)."""
@@ -502,10 +517,14 @@ def _input_count(target, pair, max_order: int, chain, declared: float) -> tuple:
     from ..gearbox.pinion_count import pinion_evidence
 
     table = order_table(_PairDescription.train(pair))
-    return pinion_evidence(_lines(target, max_order), chain.speed, target.shape[0], table, int(pair.Z1), declared)
+    return pinion_evidence(
+        _lines(target, max_order, spectra), chain.speed, target.shape[0], table, int(pair.Z1), declared
+    )
 
 
-def _traded_line(target, pair, max_order: int, chain, teeth: int, record: dict, shown: int | None = None) -> str:
+def _traded_line(
+    target, pair, max_order: int, chain, teeth: int, record: dict, shown: int | None = None, spectra=None
+) -> str:
     """The line of a speed found from the mesh lines a whole tooth's share off the described one: the input
     pinion's sidebands decide between the described count at the speed found and *teeth* at the described
     speed, as inspect decides it (their spacing is the input shaft's turn, whatever the speed read); where
@@ -513,7 +532,7 @@ def _traded_line(target, pair, max_order: int, chain, teeth: int, record: dict, 
     every stage's mesh where 18 puts it at 33.06 Hz, the input's sidebands 17 teeth apart at 35 Hz. *shown*:
     the count the input shaft's lines show read as inspect reads them (_input_count), where the comb of
     mesh_check's reading shows none or another."""
-    mesh = mesh_check(target, pair.Z1, pair.Z2, max_order, later_combs(pair), None, False)["inspect"]
+    mesh = mesh_check(target, pair.Z1, pair.Z2, max_order, later_combs(pair), None, False, spectra)["inspect"]
     seen, spread = mesh.get("z1_seen"), mesh.get("z1_resolution") or 0.0
     if seen is None or abs(seen - teeth) > max(TEETH_AGREE, spread):
         if shown != teeth:
@@ -528,13 +547,13 @@ def _traded_line(target, pair, max_order: int, chain, teeth: int, record: dict, 
     )
 
 
-def _inspect_unchecked(target, pair, max_order: int, on_input: bool, tacho) -> list[str]:
+def _inspect_unchecked(target, pair, max_order: int, on_input: bool, tacho, spectra=None) -> list[str]:
     """gearbox.match.unchecked of *target*'s revolutions read against *pair*'s train as inspect reads a record
     (the input's order 1 where *on_input*, a tacho's shaft index from *tacho*: _tacho_read), no speed found."""
     from ..gearbox.match import check_description, unchecked
 
     box = _PairDescription.train(pair)
-    read = check_description(_lines(target, max_order), box, target.shape[0], on_input, tacho and tacho[1])
+    read = check_description(_lines(target, max_order, spectra), box, target.shape[0], on_input, tacho and tacho[1])
     return unchecked(read, box, None)
 
 
@@ -551,7 +570,9 @@ def unchecked_record(unresolved: list[str], takes: tuple = ()) -> dict:
     return {"items": list(unresolved), "line": line}
 
 
-def _misread_line(target, pair, max_order: int, tacho: tuple, ppr: int | None, record: dict) -> str | None:
+def _misread_line(
+    target, pair, max_order: int, tacho: tuple, ppr: int | None, record: dict, spectra=None
+) -> str | None:
     """The one line of a tacho read on another shaft with another count of marks a turn than it gives
     (inspect_tacho.misread on the stages as inspect reads them: check_description with the tacho's shaft), or
     None. *tacho*: _tacho_read's; *ppr*: the marks a turn read (None: not known)."""
@@ -561,7 +582,7 @@ def _misread_line(target, pair, max_order: int, tacho: tuple, ppr: int | None, r
     box = _PairDescription.train(pair)
     _, read, ratio = tacho
     n = target.shape[0]
-    lines = _lines(target, max_order)
+    lines = _lines(target, max_order, spectra)
     check = check_description(lines, box, n, read == 0, read)
     found = misread(check, box, box.shafts[read], ppr, ratio, 1.0 / n, lines)
     if found is None:
@@ -570,7 +591,7 @@ def _misread_line(target, pair, max_order: int, tacho: tuple, ppr: int | None, r
     return misread_line(found, check, box.shafts[read], ppr, IN_TARGET)
 
 
-def outward_line(target, pair, max_order: int, tacho: int, record: dict) -> str | None:
+def outward_line(target, pair, max_order: int, tacho: int, record: dict, spectra=None) -> str | None:
     """The one line of the first gear, read outward from the tacho's shaft (index *tacho*; 0, the input,
     alike), whose tooth count the target's revolutions contradict, or None. The stages are read as inspect
     reads them (gearbox.match.check_description with the tacho's shaft); a stage's mesh, in orders of
@@ -583,7 +604,7 @@ def outward_line(target, pair, max_order: int, tacho: int, record: dict) -> str 
     from ..gearbox.match import check_description
 
     box = _PairDescription.train(pair)
-    stages = check_description(_lines(target, max_order), box, target.shape[0], tacho == 0, tacho)["stages"]
+    stages = check_description(_lines(target, max_order, spectra), box, target.shape[0], tacho == 0, tacho)["stages"]
     found = inspect_first(stages) or outward(stages, box, tacho)
     if found is None:
         return None
@@ -591,14 +612,14 @@ def outward_line(target, pair, max_order: int, tacho: int, record: dict) -> str 
     return line
 
 
-def _no_tacho_line(target, pair, max_order: int, record: dict) -> str | None:
+def _no_tacho_line(target, pair, max_order: int, record: dict, spectra=None) -> str | None:
     """outward_line of a multi-stage train's record without a tacho, read as inspect reads one (no shaft's
     order given), from the input shaft, when inspect finds the first mesh where described; else None."""
     from ..gearbox.leading import inspect_first, outward
     from ..gearbox.match import check_description
 
     box = _PairDescription.train(pair)
-    stages = check_description(_lines(target, max_order), box, target.shape[0], False, None)["stages"]
+    stages = check_description(_lines(target, max_order, spectra), box, target.shape[0], False, None)["stages"]
     if len(stages) < 2 or not stages[0].get("matched"):
         return None
     origin = "the input shaft (no tacho: its speed from the mesh lines)"
@@ -609,21 +630,23 @@ def _no_tacho_line(target, pair, max_order: int, record: dict) -> str | None:
     return line
 
 
-def count_ambiguity(target, pair, max_order: int, chain, declared: float | None = None) -> dict | None:
+def count_ambiguity(
+    target, pair, max_order: int, chain, declared: float | None = None, spectra: Spectra | None = None
+) -> dict | None:
     """Where the target's speed came from the description's mesh lines (no tacho, no speed given) and no
     line of the input shaft tells the pinion's count, the other counts the mesh line allows at speeds
     within the nominal range, as inspect decides it (gearbox.pinion_count.pinion_evidence: inspect's
     check.ambiguous): {'speed_hz', 'others': [(teeth, Hz)], 'line'}, else None. A structure that passes
     then holds only if the input turns at the speed read (a 37-tooth pinion at 24.53 Hz meshes where the
     described 36 at 25.22 Hz do). *declared*: the description's speed where the chain holds none (a measured
-    dataset's chain, data.chain.chain_of)."""
+    dataset's chain, data.chain.chain_of). *spectra*: structure_line's readings, or None."""
     declared = (chain and chain.described_speed) or declared
     if chain is None or not chain.speed_from_mesh or not declared:
         return None
     from ..gearbox.pinion_count import alternatives_words
     from ..signals.checks import fmt_hz
 
-    _, seen, others = _input_count(target, pair, max_order, chain, declared)
+    _, seen, others = _input_count(target, pair, max_order, chain, declared, spectra)
     if seen is not None or not others:
         return None
     line = (
@@ -650,11 +673,13 @@ def first_difference(source, target, pair, settings, rows, fresh, plain, before,
         line = speed_line(chain.speed, record["speed_hz"]["source"], pair.Z1 if chain.speed_from_mesh else None)
         if line:
             return "structure differs", line, record
-    line = structure_line(target, pair, settings.max_order, chain, plain, record, chain and chain.pulses_per_rev)
+    spectra = Spectra()  # the structure check's and the ambiguity's one reading of each history
+    ppr = chain and chain.pulses_per_rev
+    line = structure_line(target, pair, settings.max_order, chain, plain, record, ppr, spectra)
     if line:
         return "structure differs", line, record
     declared = record.get("speed_hz", {}).get("source")  # a measured dataset's chain holds no described speed
-    if ambiguous := count_ambiguity(target, pair, settings.max_order, chain, declared):
+    if ambiguous := count_ambiguity(target, pair, settings.max_order, chain, declared, spectra):
         record["ambiguous"] = ambiguous  # the diagnosis goes on; its verdict says it (conclusion.verdict_text)
     before = before()
     if not gap_seen(before):

@@ -47,15 +47,51 @@ class _PairDescription:
         return cls(tuple(stages), SHAFT_NAMES[len(stages)])
 
 
-def _lines(rows: np.ndarray, max_order: int):
-    """The spectral lines of revolutions *rows* (n, P) laid end to end, as `gearlab inspect` reads a record."""
-    from ..gearbox.speed import THRESHOLD_DB, find_lines
-    from ..signals import spectrum
+class Spectra:
+    """The spectra and lines of the revolutions one structure check reads (structure.structure_line): it reads one
+    history several ways (mesh_check, inspect's stages, a tacho's misread, what passed unchecked), and a long history's
+    spectrum and running median cost seconds a reading (a three-stage box's 7 takes of 20 s at 20 kHz: ~45 s each).
+    Made per check and dropped with it. Keyed on the rows' memory, shape and strides (a view of the same revolutions
+    is the same rows), each held while the check lasts so no other array is given their memory; read-only, so no
+    reading changes what the next one reads."""
 
-    n, points = rows.shape
-    orders, amp = spectrum(np.asarray(rows, dtype=np.float64).reshape(-1), points)
-    top = 0.9 * (min(max_order, points // 2) if max_order else points // 2)
-    return find_lines(orders, amp, THRESHOLD_DB, 1.5 / n, top)
+    def __init__(self) -> None:
+        self._read: dict = {}
+
+    def _entry(self, rows) -> dict:
+        rows = np.asarray(rows, dtype=np.float64)
+        key = (rows.__array_interface__["data"][0], rows.shape, rows.strides)
+        if key not in self._read:
+            from ..signals import spectrum
+
+            orders, amp = spectrum(rows.reshape(-1), rows.shape[1])
+            orders.flags.writeable = amp.flags.writeable = False
+            self._read[key] = {"rows": rows, "spectrum": (orders, amp)}
+        return self._read[key]
+
+    def spectrum(self, rows) -> tuple:
+        """(orders, amplitude) of revolutions *rows* (n, P) laid end to end: signals.spectrum at P points a turn."""
+        return self._entry(rows)["spectrum"]
+
+    def lines(self, rows, max_order: int):
+        """The spectral lines of revolutions *rows* (n, P) laid end to end, as `gearlab inspect` reads a record."""
+        from ..gearbox.speed import THRESHOLD_DB, find_lines
+
+        entry = self._entry(rows)
+        if max_order not in entry:
+            n, points = entry["rows"].shape
+            top = 0.9 * (min(max_order, points // 2) if max_order else points // 2)
+            found = find_lines(*entry["spectrum"], THRESHOLD_DB, 1.5 / n, top)
+            for values in (found.at, found.amp, found.db):
+                values.flags.writeable = False
+            entry[max_order] = found
+        return entry[max_order]
+
+
+def _lines(rows: np.ndarray, max_order: int, spectra: Spectra | None = None):
+    """The spectral lines of revolutions *rows* (n, P) laid end to end, as `gearlab inspect` reads a record; read
+    once per structure check where its *spectra* are given."""
+    return (spectra or Spectra()).lines(rows, max_order)
 
 
 def wheel_line(mesh: dict, z2: int, role: str = "wheel") -> str | None:
@@ -97,7 +133,9 @@ def unseen_mesh(k: int, target: list, source: list) -> str | None:
     )
 
 
-def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 0) -> dict:
+def later_stages(
+    target: np.ndarray, source: np.ndarray, pair, max_order: int = 0, spectra: Spectra | None = None
+) -> dict:
     """Stages after the first of a multi-stage source: where the target's lines put each stage's mesh order against
     where the source's own lines put it, both read alike (inspect's check_description on each). A later stage's mesh
     is often weak, or held by its harmonics, so it is not tested against the description's order but against the
@@ -106,7 +144,8 @@ def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 
     order), or when the target holds no line where the source's mesh, at its level under the first mesh, would
     stand UNSEEN_DB over the target's floor. With no *source* the gap knows what inspect knows, and a later mesh the
     target shows no line at differs as inspect says it (check_description's 'no_line'). {'stages': [{stage,
-    expected, source, target}], 'line': the one line of the first difference, or None}."""
+    expected, source, target}], 'line': the one line of the first difference, or None}. *spectra*: the structure
+    check's readings (Spectra), or None."""
     from ..gearbox import order_table
     from ..gearbox.match import check_description, tol_mesh, wheel_upstream
 
@@ -118,7 +157,7 @@ def later_stages(target: np.ndarray, source: np.ndarray, pair, max_order: int = 
     read = {}
     for name, rows in (("target", target), ("source", source)):
         if rows is not None:  # no source: a measured target read against the description alone
-            lines = _lines(rows, max_order)
+            lines = _lines(rows, max_order, spectra)
             check = check_description(lines, box, rows.shape[0], True)
             read[name] = (lines, rows.shape[0], check["stages"])
     for k in range(1, len(box.stages)):
