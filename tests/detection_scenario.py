@@ -148,6 +148,30 @@ def shared_run(path: Path, out: Path) -> Path:
 TEXT_FILES = {".json", ".jsonl", ".html", ".md", ".csv", ".toml", ".txt"}  # what a run writes as text
 
 
+# two healthy history takes; test: a healthy take at twice the gain (h3), one at the history's (h4), two chipped, one
+# of them (f2) at twice the gain (tests/test_detection_level_change.py, test_score_level_measure.py)
+GAIN_FILES = [
+    ("h1", "history", "healthy", 0.0),
+    ("h2", "history", "healthy", 0.0),
+    ("h3", "test", "healthy", 0.0),
+    ("h4", "test", "healthy", 0.0),
+    ("f1", "test", "fault", 4.0),
+    ("f2", "test", "fault", 4.0),
+]
+DOUBLED = {"h3": (0.0, 2), "f2": (4.0, 5)}  # name: (chip, seed)
+
+
+def gain_run(folder: Path) -> Path:
+    """The finished run of the tiny scenario with GAIN_FILES in *folder* (shared_run: one per process)."""
+    from textrecords import signals, text, write_zip
+
+    (folder / "data").mkdir(exist_ok=True)
+    for name, (chip, seed) in DOUBLED.items():
+        vib, tacho = signals(revolutions=40, chip=chip, seed=seed, phase=0.7 * seed)
+        write_zip(folder / "data" / f"{name}.zip", text(2.0 * vib, tacho))
+    return shared_run(scenario(folder, files=GAIN_FILES, methods=("source_only",)), folder / "runs")
+
+
 def scores(run_dir: Path) -> list[dict]:
     with (run_dir / "scores.csv").open() as f:
         return list(csv.DictReader(f))

@@ -11,34 +11,17 @@ from __future__ import annotations
 import json
 
 import pytest
-from detection_scenario import scenario, shared_run
-from textrecords import signals, text, write_zip
+from detection_scenario import gain_run
 
 from gearlab.kinds.detection_summary import verdict
 from gearlab.kinds.detection_verdict import watched_calls
 from gearlab.kinds.detection_which_gear import NOT_LOCALISED, WATCHED, decision_of, is_level_change, level_call
 
-# two healthy history takes; test: a healthy take at twice the gain (h3), one at the history's (h4), two chipped, one
-# of them (f2) at twice the gain
-FILES = [
-    ("h1", "history", "healthy", 0.0),
-    ("h2", "history", "healthy", 0.0),
-    ("h3", "test", "healthy", 0.0),
-    ("h4", "test", "healthy", 0.0),
-    ("f1", "test", "fault", 4.0),
-    ("f2", "test", "fault", 4.0),
-]
-DOUBLED = {"h3": (0.0, 2), "f2": (4.0, 5)}  # name: (chip, seed)
-
 
 @pytest.fixture(scope="module")
 def made(tmp_path_factory, module_cache):
     folder = tmp_path_factory.mktemp("gain")
-    (folder / "data").mkdir()
-    for name, (chip, seed) in DOUBLED.items():
-        vib, tacho = signals(revolutions=40, chip=chip, seed=seed, phase=0.7 * seed)
-        write_zip(folder / "data" / f"{name}.zip", text(2.0 * vib, tacho))
-    run = shared_run(scenario(folder, files=FILES, methods=("source_only",)), folder / "runs")
+    run = gain_run(folder)
     return run, json.loads((run / "summary.json").read_text())
 
 

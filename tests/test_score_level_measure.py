@@ -10,33 +10,17 @@ import json
 import shutil
 
 import pytest
-from detection_scenario import scenario, shared_run
-from textrecords import signals, text, write_zip
+from detection_scenario import gain_run
 
 from gearlab.kinds.detection_level import OLD_LEVEL
 from gearlab.kinds.detection_which_gear import is_level_change
 from gearlab.parts import scoring
 
-# as test_detection_level_change: a healthy test take at twice the gain (h3), one at the history's (h4), two chipped
-FILES = [
-    ("h1", "history", "healthy", 0.0),
-    ("h2", "history", "healthy", 0.0),
-    ("h3", "test", "healthy", 0.0),
-    ("h4", "test", "healthy", 0.0),
-    ("f1", "test", "fault", 4.0),
-    ("f2", "test", "fault", 4.0),
-]
-DOUBLED = {"h3": (0.0, 2), "f2": (4.0, 5)}  # name: (chip, seed)
-
 
 @pytest.fixture(scope="module")
 def made(tmp_path_factory, module_cache):
     folder = tmp_path_factory.mktemp("gain")
-    (folder / "data").mkdir()
-    for name, (chip, seed) in DOUBLED.items():
-        vib, tacho = signals(revolutions=40, chip=chip, seed=seed, phase=0.7 * seed)
-        write_zip(folder / "data" / f"{name}.zip", text(2.0 * vib, tacho))
-    run = shared_run(scenario(folder, files=FILES, methods=("source_only",)), folder / "runs")
+    run = gain_run(folder)
     return folder, run
 
 
