@@ -43,11 +43,11 @@ def test_a_history_of_one_take_does_not_put_a_called_take_at_its_own_level_off_i
 
     revs = np.random.default_rng(1).normal(size=(30, 256))
     take = lambda name, k: (SimpleNamespace(path=name), k * revs)  # noqa: E731
-    ratios, spread = run_levels({"history": [take("h.csv", 1.0)], "test": [take("t.csv", 1.03), take("x", 1.5)]})
+    ratios, spread, _ = run_levels({"history": [take("h.csv", 1.0)], "test": [take("t.csv", 1.03), take("x", 1.5)]})
     assert called_level(True, [], ratios["t.csv"], spread) == "", (ratios, spread)
     assert level_line(ratios["x"]).startswith("level 1.5 x its history's")
     # two history takes 2 % apart: a called take 10 % off them is still said, as before
-    ratios, spread = run_levels({"history": [take("a", 1.0), take("b", 1.02)], "test": [take("t.csv", 1.1)]})
+    ratios, spread, _ = run_levels({"history": [take("a", 1.0), take("b", 1.02)], "test": [take("t.csv", 1.1)]})
     assert called_level(True, [], ratios["t.csv"], spread).startswith("level 1.1 x its history's, its own takes")
 
 

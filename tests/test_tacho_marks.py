@@ -84,3 +84,6 @@ def test_a_right_count_or_another_speed_with_samples_enough_is_read():
     with pytest.raises(GearlabInputError, match=r"not 1\? \(\[sensor\] pulses_per_rev = 12\)"):
         refuse_marks(12800.0, 493.6, (40.0, 19, ()), 1, *at)
     refuse_marks(12800.0, 493.6, (40.0, 19, (12.34, 1 / 12.34)), 1, *at)
+    # the nearer explanation wins: 10.00 x is 10 marks typed as 1 beside two shafts turning 1 : 10.02
+    with pytest.raises(GearlabInputError, match=r"not 1\? \(\[sensor\] pulses_per_rev = 10\)"):
+        refuse_marks(12800.0, 400.0, (40.0, 19, (10.02, 1 / 10.02)), 1, *at)

@@ -420,8 +420,12 @@ def refuse_marks(fs: float, speed: float, described: tuple, ppr: int, where: str
 
     hz, z1, ratios = described
     # a tacho on another shaft than the one it is read as reads the speed by a ratio of two shafts' turns (19/62 x
-    # 23/87: 12.34, not 12 marks): the structure check names that shaft (inspect_tacho.elsewhere_line)
-    if any(abs(speed / hz / r - 1) < SHAFT_RATIO_TOL for r in ratios):
+    # 23/87: 12.34, not 12 marks): the structure check names that shaft (inspect_tacho.elsewhere_line). The nearer
+    # explanation wins: 27/86 x 34/107 turns 1 : 10.02, and a 60-mark encoder typed 6 reads 10.00 x
+    r = speed / hz
+    whole = max(round(r if r >= 1 else 1 / r), 1)
+    off_whole = abs((r if r >= 1 else 1 / r) / whole - 1)
+    if any(abs(r / q - 1) < min(SHAFT_RATIO_TOL, off_whole) for q in ratios):
         return
     line = speed_marks_line(speed, hz, ppr, where, table)
     if line and fs / speed < 2 * (z1 + SIDEBANDS) + 1:  # the gap's need (gap_inputs.check_points)
