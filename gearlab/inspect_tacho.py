@@ -175,17 +175,31 @@ def _whole_count(ppr: int, ratio: float) -> int:
     return typed if typed and abs(ppr * ratio / typed - 1) < 0.05 else round(ppr * ratio)
 
 
+SHAFT_RATIO_TOL = 0.01  # a speed read a shaft ratio off within this: the tacho's shaft, not its count of marks
+
+
+def shaft_ratios(box: Gearbox) -> tuple[float, ...]:
+    """Every ratio of two different shafts' turns of the description *box* (speed_marks_line's *ratios*)."""
+    turns = [float(o) for o in order_table(box).shaft_orders]
+    return tuple(a / b for a in turns for b in turns if abs(a / b - 1) > SHAFT_RATIO_TOL)
+
+
 def speed_marks_line(
-    speed: float, described: float | None, ppr: int | None, where: str, table: str = "[target]"
+    speed: float, described: float | None, ppr: int | None, where: str, table: str = "[target]", ratios=()
 ) -> str | None:
     """The one line of a tacho whose *speed* read is a whole count of marks off the *described* speed (a 60-mark
     encoder typed as 6: 600 Hz read for 60). *where*: the location of the pulses_per_rev read, in *table* (a
-    scenario's [target], a 'files' entry, the description's [sensor]). None where no count fits or the speed is
-    within 25 % of the described (slip, another load)."""
+    scenario's [target], a 'files' entry, the description's [sensor]). None where no count fits, the speed is
+    within 25 % of the described (slip, another load), or nearer one of *ratios* (shaft_ratios: a tacho on another
+    shaft than the one it is read as, which the structure check names; 19/62 x 23/87 is 12.34, not 12 marks, while a
+    60-mark encoder typed 6 reads 10.00 x beside a box turning 1 : 10.02)."""
     if not described or not ppr or 0.8 <= speed / described <= 1.25:
         return None
     marks = _whole_count(ppr, speed / described)
-    if marks < 1 or marks == ppr or abs(ppr * speed / described / marks - 1) >= 0.05:
+    off = abs(ppr * speed / described / marks - 1) if marks >= 1 else math.inf
+    if marks < 1 or marks == ppr or off >= 0.05:
+        return None
+    if any(abs(speed / described / q - 1) < min(SHAFT_RATIO_TOL, off) for q in ratios):
         return None
     return (
         f"{where}: the tacho reads the shaft at {speed:.4g} Hz, {speed / described:.3g} x the described "

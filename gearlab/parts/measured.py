@@ -303,6 +303,8 @@ def target_spec(t: dict, where: str, base: Path, need=ROLES, box=None) -> Target
     checked as kinds.common.MEASURED declares its keys (bounds, choices, column indices) when the
     table was read; here the values become SI. *box*: the [source]'s gearbox description, whose
     shafts 'tacho_shaft' (default: its [sensor] tacho) names."""
+    from ..inspect_tacho import shaft_ratios  # inspect_tacho imports the data layer: read lazily
+
     keys = acquisition(t, where)
     vibration, tacho = keys["vibration"], keys["tacho"]
     if vibration == tacho:
@@ -419,28 +421,9 @@ def refuse_marks(fs: float, speed: float, described: tuple, ppr: int, where: str
     from ..inspect_tacho import speed_marks_line
 
     hz, z1, ratios = described
-    # a tacho on another shaft than the one it is read as reads the speed by a ratio of two shafts' turns (19/62 x
-    # 23/87: 12.34, not 12 marks): the structure check names that shaft (inspect_tacho.elsewhere_line). The nearer
-    # explanation wins: 27/86 x 34/107 turns 1 : 10.02, and a 60-mark encoder typed 6 reads 10.00 x
-    r = speed / hz
-    whole = max(round(r if r >= 1 else 1 / r), 1)
-    off_whole = abs((r if r >= 1 else 1 / r) / whole - 1)
-    if any(abs(r / q - 1) < min(SHAFT_RATIO_TOL, off_whole) for q in ratios):
-        return
-    line = speed_marks_line(speed, hz, ppr, where, table)
+    line = speed_marks_line(speed, hz, ppr, where, table, ratios)
     if line and fs / speed < 2 * (z1 + SIDEBANDS) + 1:  # the gap's need (gap_inputs.check_points)
         raise GearlabInputError(line)
-
-
-SHAFT_RATIO_TOL = 0.01  # a speed read a shaft ratio off within this: the tacho's shaft, not its count of marks
-
-
-def shaft_ratios(box) -> tuple[float, ...]:
-    """Every ratio of two different shafts' turns of the description *box* (refuse_marks)."""
-    from ..gearbox.orders import order_table
-
-    turns = [float(o) for o in order_table(box).shaft_orders]
-    return tuple(a / b for a in turns for b in turns if abs(a / b - 1) > SHAFT_RATIO_TOL)
 
 
 def own_shafts(files: tuple[TargetFile, ...], tachos: list, box, where: str, shaft, mixed: bool) -> tuple:
