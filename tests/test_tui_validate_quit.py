@@ -14,6 +14,17 @@ from test_validate_screen import one_scenario_held
 from gearlab.tui import GearlabApp, catalog
 
 
+def returned_at_once_then_let_go(gate: threading.Event, ended: threading.Event, threads: str) -> None:
+    """The app's run has returned: the held validation had not ended then; let go, it ends, and its threads (named
+    *threads*...) are joined: their results had nowhere to go, dropped, nothing raised."""
+    returned_before_the_validation_ended = not ended.is_set()
+    gate.set()
+    assert ended.wait(30)
+    assert returned_before_the_validation_ended
+    for thread in [t for t in threading.enumerate() if t.name.startswith(threads)]:
+        thread.join(30)
+
+
 def test_quitting_while_a_validation_runs_does_not_wait_for_it(tmp_path, monkeypatch):
     started, gate, ended = threading.Event(), threading.Event(), threading.Event()
     failed = []  # what the validation's thread raised after the app had gone, where anything
@@ -38,12 +49,7 @@ def test_quitting_while_a_validation_runs_does_not_wait_for_it(tmp_path, monkeyp
         await pilot.press("q")
 
     drive(GearlabApp(folder), script)  # asyncio.run of the app: its run over, its loop closed
-    returned_before_the_validation_ended = not ended.is_set()
-    gate.set()
-    assert ended.wait(30)
-    assert returned_before_the_validation_ended
-    for thread in [t for t in threading.enumerate() if t.name.startswith("validate ")]:
-        thread.join(30)  # its result had nowhere to go: dropped, nothing raised
+    returned_at_once_then_let_go(gate, ended, "validate ")
     assert failed == [] and notices == [], (failed, notices)
 
 
@@ -68,10 +74,5 @@ def test_quitting_while_the_tree_s_marks_are_validated_does_not_wait_for_them(tm
             await pilot.press("q")
 
     asyncio.run(main())
-    returned_before_the_validation_ended = not ended.is_set()
-    gate.set()
-    assert ended.wait(30)
-    assert returned_before_the_validation_ended
-    for thread in [t for t in threading.enumerate() if t.name.startswith("check ")]:
-        thread.join(30)  # its result had nowhere to go: dropped, nothing raised
+    returned_at_once_then_let_go(gate, ended, "check ")
     assert failed == [], failed
