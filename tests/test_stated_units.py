@@ -6,6 +6,7 @@ m/s². What the reader assumed is one line of inspect's output; a unit it cannot
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import h5py
@@ -68,3 +69,37 @@ def test_inspect_says_what_the_reader_assumed(tmp_path, cli):
     code, out, err = cli("inspect", path, "--vibration", "acc", "--speed", "25 Hz")
     assert code == 0, err
     assert "value x 490.332 (channel 'acc' in 50 g: one file unit is 50 g)" in out, out
+
+
+@pytest.mark.parametrize("write", [_h5, _csv], ids=["h5 attribute", "csv units row"])
+@pytest.mark.parametrize(
+    ("unit", "meant", "key", "keys"),
+    [("G", "g", "unit", {"unit": "g"}), ("50 G", "50 g", "gain", None), ("MV", "mV", "unit", None)],
+)
+def test_a_stated_unit_in_another_case_is_refused_as_the_unit_key_is(tmp_path, write, unit, meant, key, keys):
+    # a file's 'G' was read as g and a 'MV' as megavolts (10⁹ x a millivolt), while unit = "G" was refused with
+    # "did you mean 'g'?": one rule now, the file's refusal naming the file and the key that reads it
+    from gearlab.data.channel_units import declared_unit
+    from gearlab.errors import GearlabInputError
+
+    path = write(tmp_path / "r", ACC / G, unit)
+    with pytest.raises(GearlabInputError) as file_said:
+        read_recording(path, "acc", where="s.toml: [target]")
+    line = str(file_said.value)
+    assert "\n" not in line and line.startswith(f"s.toml: [target] key '{key}': missing;"), line
+    assert f"{path} states its unit as '{unit}', not '{meant}'" in line and f"{key} = '{meant}'" in line, line
+    with pytest.raises(GearlabInputError, match=f"did you mean '{meant}'"):  # the 'unit' key's refusal, as before
+        declared_unit(unit, "s.toml: [target] key 'unit'")
+    if keys is not None:  # the key the refusal names reads the file
+        got = read_recording(path, "acc", **keys)
+        assert np.max(np.abs(got.signal - ACC)) < 1e-8 * 20, got.units
+
+
+def test_inspect_names_the_option_that_reads_a_stated_unit_in_another_case(tmp_path, cli):
+    path = _h5(tmp_path / "r.h5", ACC / G, "G")
+    code, out, err = cli("inspect", path, "--vibration", "acc", "--speed", "25 Hz", "--json")
+    units = json.loads(out)["units"] if code == 0 else err  # any column is inspected: as stored, and why
+    assert units.startswith("value x 1, not m/s² (") and "states its unit as 'G'" in units, units
+    assert units.endswith("e.g. --unit 'g')"), units
+    code, out, err = cli("inspect", path, "--vibration", "acc", "--speed", "25 Hz", "--unit", "g")
+    assert code == 0 and "not m/s²" not in out and "in g" in out, (out, err)

@@ -183,8 +183,8 @@ def declared_unit(value, where: str):
         return value
     read = _VOLTS_SPELLED.get(re.sub(r"\s", "", value).lower()) if isinstance(value, str) else None
     # any other acceleration or volt a name may end in ('mg', 'mm/s²', 'in/s^2', 'uV'): was refused; the symbols'
-    # case stays as said above ('G', 'MV', 'mG' refused)
-    cased = isinstance(value, str) and "G" not in value and value.lower() not in {u.lower() for u in UNITS}
+    # case stays as said above ('G', 'MV', 'mG' refused: miscased)
+    cased = isinstance(value, str) and "G" not in value and not miscased(value)
     if read is None and cased and name_unit(f"[{value}]") is not None:
         return value
     if read is None:
@@ -201,11 +201,29 @@ def declared_unit(value, where: str):
     return read
 
 
+# The one rule of a unit's case, for a 'unit' key (--unit) and a unit a file states alike: a symbol's case is its
+# meaning (G is giga or gauss, MV megavolt, mG milligauss), so one written in another case than these is refused with
+# the symbol meant, never read as a guess. A file's unit is its DAQ's, outside the user's control: its refusal names
+# the key that reads the file (unit = 'g', --unit g), which then wins over that unit (channel_scale), and the run's
+# 'values:' line says so. (A channel's name is no unit's text: 'ACC_G', a logger's upper-cased name, reads as g.)
+_SYMBOLS = UNITS + ("mg", "µg", "ug", "uV", "µV")
+
+
+def miscased(value) -> str:
+    """The symbol *value* writes in another case ('G' -> 'g', 'MV' -> 'mV', '50 G' -> '50 g', 'M/S^2' -> 'm/s^2'),
+    else ''."""
+    found = re.fullmatch(r"(\d+(?:\.\d*)?\s*)?(.+)", " ".join(value.split())) if isinstance(value, str) else None
+    if found is None or found[2] in _SYMBOLS:
+        return ""
+    same = [u for u in _SYMBOLS if found[2].lower() == u.lower()]
+    return (found[1] or "") + same[0] if same else ""
+
+
 def _cased(value) -> str:
-    """The refusal's hint where *value* is a UNITS symbol in the wrong case ('G', 'MV'): a symbol's case is its
-    meaning, which difflib's likeness of 'G' to 'g' (none) does not see."""
-    same = [u for u in UNITS if isinstance(value, str) and value.strip().lower() == u.lower()]
-    return f" (did you mean {same[0]!r}? a unit's symbol is case-sensitive)" if same else ""
+    """The refusal's hint where *value* is a symbol in the wrong case (miscased): difflib's likeness of 'G' to 'g'
+    (none) does not see it."""
+    meant = miscased(value)
+    return f" (did you mean {meant!r}? a unit's symbol is case-sensitive)" if meant else ""
 
 
 def channel_scale(
@@ -217,12 +235,14 @@ def channel_scale(
     unit: str | None = None,
     declared: str | None = None,
     flag=None,
+    path: str = "",
 ) -> tuple[float, str]:
     """(m/s² per file value, how) of a vibration channel: gain / sensitivity, with what the channel's name -- or else
     the *unit* the file states for it (an HDF5 'units' attribute), or else the scenario's 'unit' key (*declared*, which
     neither may contradict) -- says of its unit (volts, and a gain in volts, need a sensitivity; m/s² or g have none;
     mV are volts / 1000). *where*: the scenario table, for the one-line errors naming its key (or *flag*(key): a
-    command's option); *integer*: the channel holds integer counts (a sensitivity then needs a gain)."""
+    command's option); *integer*: the channel holds integer counts (a sensitivity then needs a gain); *path*: the
+    file, where *where* is not it."""
 
     def at(key: str) -> str:
         return f"{where}: {flag(key)}" if flag else f"{where} key '{key}'"
@@ -234,7 +254,15 @@ def channel_scale(
                 f"accelerometer's volts, not a {other[0]} in {other[1]}: record the accelerometer's own signal"
             )
     said, says, keyed = name_unit(name), "as its name says", False
-    if said is None and unit is not None:
+    if said is None and unit is not None and (meant := miscased(unit)):  # the rule above _SYMBOLS
+        key = "gain" if meant[:1].isdigit() else "unit"  # a full scale ('50 G') is a gain's
+        if (gain if key == "gain" else declared) is None:
+            raise GearlabInputError(
+                f"{at(key)}: missing; channel '{name}' of {path or where} states its unit as '{unit}', not "
+                f"'{meant}' (a unit's symbol is case-sensitive); expected the unit its values are in, e.g. "
+                + (f"{flag(key)} '{meant}'" if flag else f"{key} = '{meant}'")
+            )
+    elif said is None and unit is not None:
         said, says = unit_scale(unit), f"as the file's unit '{unit}' says"
     if declared is not None:
         declared = declared_unit(declared, at("unit"))

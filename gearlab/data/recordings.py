@@ -460,13 +460,13 @@ def read_recording(
     # An integer record is quantised: one count (a WAV's 1/2^(bits-1) of full scale) is its step.
     step = contents.steps.get(vibration, 1.0 if raw.dtype.kind in "iu" else 0.0)
     name = named(vibration, contents.available)
-    scale, units = channel_scale(name, sensitivity, gain, where or path, unit=contents.units.get(name), declared=unit)
+    stated = contents.units.get(name)  # the unit the file states for it
+    scale, units = channel_scale(name, sensitivity, gain, where or path, unit=stated, declared=unit, path=path)
     vib = series(raw, vibration, "vibration", path) * scale
     units += level_hint(units, vib, "unit = '{}'")
     rate, fs_source = sampling_rate(contents, fs, vib.size, path)
-    tacho_values = None
+    tacho_values = None if tacho is None else series(contents.found[tacho], tacho, "tacho", path)
     if tacho is not None:
-        tacho_values = series(contents.found[tacho], tacho, "tacho", path)
         same_length(tacho_values, tacho, "tacho", vib.size, vibration, path)
     channels = [c for c in contents.available if not is_rate_or_time(str(c))]
     asked = {channel_key(n): contents.found[channel_key(n)] for n, _ in extra if n is not None}
@@ -796,5 +796,5 @@ def check_recording(
     if vibration not in (None, ""):
         name = channel_key(vibration)
         name = named(name, header.channels) if header.indexed else header.resolve(name)
-        channel_scale(name, sensitivity, gain, where, name in header.integer, header.units.get(name), unit)
+        channel_scale(name, sensitivity, gain, where, name in header.integer, header.units.get(name), unit, path=path)
     return header
