@@ -103,9 +103,9 @@ class InspectOptions:
 # --- the record -------------------------------------------------------------------------------
 
 
-def read_record(path: str, options: InspectOptions) -> Recording:
-    """The record as *options* name it: unlike read_recording, the vibration is scaled by the given gain /
-    sensitivity alone (no unit read from a channel's name: any column can be inspected), or by a --unit."""
+def read_record(path: str, options: InspectOptions, history: bool = False) -> Recording:
+    """The record as *options* name it, scaled by the unit its name or file says with the given gain / sensitivity
+    or --unit, else as stored (any column can be inspected); a *history* file refuses the chain given it in one line."""
     if options.pulses_per_rev is not None and options.tacho is None:
         raise pulses_without_tacho(path, "--pulses-per-rev", lambda c: f"--tacho {c}", "--tacho")
     vibration = options.vibration
@@ -137,8 +137,8 @@ def read_record(path: str, options: InspectOptions) -> Recording:
     try:  # the unit the name or file says, read as a scenario reads it: an HDF5 'vib_g' was shown in g, unsaid
         scale, units = channel_scale(str(vibration), options.sensitivity, options.gain, str(path), integer, **declared)
     except GearlabInputError as refused:  # any column can be inspected: as stored, and why not in m/s²
-        if options.unit is not None:
-            raise
+        if options.unit is not None or history and (options.sensitivity, options.gain) != (None, None):
+            raise  # a history read another way than the take, unsaid, compared nothing (inspect_history)
         units = f"value x {scale:g}, not m/s² ({str(refused).split('; ', 1)[-1]})"
     vib = series(contents.found[vibration], vibration, "vibration", path) * scale
     units += level_hint(units, vib, "--unit {}")

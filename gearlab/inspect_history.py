@@ -30,11 +30,11 @@ from .signals.localise import weakly
 from .signals.pipeline import first_complete
 
 
-def input_revolutions(path: str, box: Gearbox, options: InspectOptions) -> tuple:
+def input_revolutions(path: str, box: Gearbox, options: InspectOptions, history: bool = False) -> tuple:
     """(complete input revolutions at the pipeline's points, the first one's number from the angle's zero modulo
     the train period, the Nyquist order, the tacho's marks per turn, the speed, the rate, each revolution's speed
-    (Hz; None where not one a revolution)) of one file as read."""
-    rec = read_record(path, options)
+    (Hz; None where not one a revolution)) of one file as read (a *history* file: inspect.read_record's)."""
+    rec = read_record(path, options, history)
     speed = measured_speed(rec, box, options)
     if unconfirmed(rec, box, speed):  # read at the speed inspect's rows are read at
         speed = settle_speed(rec, box, options, speed)[0]
@@ -65,14 +65,14 @@ def localisation(path: str, history: list, box: Gearbox, options: InspectOptions
     past = []
     for p, o in read:
         try:
-            past.append(input_revolutions(p, box, o))
+            past.append(input_revolutions(p, box, o, history=True))
         except GearlabInputError as exc:
             # read with its own keys, its channel too (a --history-key gain alone keeps the record's channel names)
             if o is not options and (o.vibration, o.tacho) != (options.vibration, options.tacho):
                 raise
             name = p.replace("\\", "/").rsplit("/", 1)[-1]
             raise GearlabInputError(
-                f"{exc} (a history file read with the record's keys; its own: --history-key '{name}:vibration=NAME')"
+                f"{exc} (a history file read with the record's keys; its own: --history-key '{name}:{own_key(exc)}')"
             ) from None
     takes = [W.Take(r, f, s.mean_hz, rate, turns) for r, f, _, _, s, rate, turns in past]
     tacho = (options.tacho_shaft or box.sensor.tacho) if options.tacho is not None else ""  # the shaft it reads
@@ -107,6 +107,18 @@ def localisation(path: str, history: list, box: Gearbox, options: InspectOptions
             "compares like with like"
         )
     return out
+
+
+# The take's acquisition options read every history file (one chain, the normal case); a refusal of one of them on a
+# history file that states its own unit or rate names the --history-key that gives that file its own: '' drops one
+_CHAIN_KEYS = {"--sensitivity": "sensitivity=", "--gain": "gain=", "--unit": "unit=", "sampling rate given": "fs="}
+
+
+def own_key(exc: GearlabInputError) -> str:
+    """The --history-key KEY=VALUE that reads a history file a refusal *exc* of the take's options names; else its
+    vibration channel's."""
+    said = str(exc)
+    return next((key for words, key in _CHAIN_KEYS.items() if words in said), "vibration=NAME")
 
 
 LINES = 5  # the strongest non-synchronous envelope lines shown

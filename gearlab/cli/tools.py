@@ -173,8 +173,17 @@ def inspect(
         str | None,
         typer.Option(help="vibration unit where its name and file say none: m/s^2, g, V, mV (+ --sensitivity)"),
     ] = None,
-    history: Annotated[list[Path] | None, typer.Option(help="healthy records to localise the change against")] = None,
-    history_key: Annotated[list[str] | None, typer.Option(help="a history file's own key: [FILE:]KEY=VALUE")] = None,
+    history: Annotated[
+        list[Path] | None,
+        typer.Option(
+            help="healthy records to localise the change against, read with this take's --vibration, --tacho, --fs, "
+            "--sensitivity, --gain, --unit (one acquisition chain); a file's own unit or rate contradicting them is "
+            "refused"
+        ),
+    ] = None,
+    history_key: Annotated[
+        list[str] | None, typer.Option(help="a history file's own key: [FILE:]KEY=VALUE (KEY= drops the take's)")
+    ] = None,
     takes: Annotated[
         str | None, typer.Option(help="a logger's column marking each sample's take: a row per take (FILE[KEY=N])")
     ] = None,
