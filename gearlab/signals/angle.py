@@ -49,6 +49,41 @@ def _pulses_or_not(v: np.ndarray, low: float, high: float, edges: np.ndarray) ->
         )
 
 
+# A pulse train the sampling cannot resolve: its pulses come every FAST samples or fewer with a level a sample long
+# (at or over half the rate a train folds down, aliased: a 120-mark wheel at 25 Hz, 3 kHz, sampled at 5 kHz read as
+# 2 kHz, 16.7 Hz, unsaid), or they last a sample or less and over UNSEEN of them fall between samples (0.04 ms pulses
+# at 5 kHz: four in five unseen, read as 'a 29-1 wheel'). A once-a-turn pulse one sample wide, every one seen, passes.
+FAST = 4.0
+UNSEEN = 0.25
+MARKS_APART = range(1, 9)  # the most pulses one interval of those seen may span, unseen between them
+
+
+def _unresolved(state: np.ndarray, edges: np.ndarray, fs: float) -> None:
+    """Refuses the pulses of a Schmitt-triggered *state* (rising *edges*, samples) that come faster than a sample
+    interval resolves (FAST, UNSEEN), in words that say so."""
+    bounds = np.flatnonzero(state[1:] != state[:-1]) + 1
+    runs, high = np.diff(bounds), state[bounds[:-1]]  # each whole level between two switches, and whether high
+    if edges.size < 8 or runs.size < 4 or not high.any() or high.all():
+        return
+    shortest, d = min(np.median(runs[high]), np.median(runs[~high])), np.diff(edges)
+    if np.median(d) <= FAST and shortest <= 1:
+        raise GearlabInputError(
+            f"pulse train: its pulses come every {np.median(d):.3g} samples ({fmt_hz(fs / np.median(d))}) with a "
+            f"level one sample long: pulses at or over half the sampling rate, {fmt_hz(fs / 2)}, read folded down "
+            f"(aliased), not as they come; expected over {FAST:g} samples a pulse (fewer marks a turn, a higher rate)"
+        )
+    # the pulses' own period: the shortest interval's largest whole share that every interval is a whole multiple of
+    # (those seen fall every 4 or 5 pulses where the period is 205.76 samples: no interval is one period)
+    period = next((d.min() / k for k in MARKS_APART if np.all(np.abs(d * k / d.min() % 1 - 0.5) >= 0.35)), None)
+    unseen = 0.0 if period is None else float(np.sum(np.rint(d / period) - 1))
+    if np.median(runs[high]) <= 1 and unseen > UNSEEN * (unseen + d.size):
+        raise GearlabInputError(
+            f"pulse train: its pulses last a sample or less and {unseen / (unseen + d.size):.0%} of them fall "
+            f"between samples, unseen: pulses narrower than a sample interval ({1e3 / fs:.3g} ms at {fmt_hz(fs)}); "
+            "expected pulses several samples wide (a wider mark, or a higher rate)"
+        )
+
+
 # A sampled square pulse's edge lies anywhere between its last low and its first high sample, and the crossing
 # interpolated between those two is mid-way whatever the true time: an error uniform on ±0.5 sample, variance 1/12
 # sample² (angle_from_pulses smooths such edge times to it)
@@ -211,6 +246,7 @@ def _rising_edges(pulses: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray
         )
 
     _pulses_or_not(v, low_thr, high_thr, edges)
+    _unresolved(state, edges, fs)
     return v, edges, quantised
 
 
