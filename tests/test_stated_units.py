@@ -88,7 +88,7 @@ def test_a_stated_unit_in_another_case_is_refused_as_the_unit_key_is(tmp_path, w
     line = str(file_said.value)
     assert "\n" not in line and line.startswith(f"s.toml: [target] key '{key}': missing;"), line
     assert f"{path} states its unit as '{unit}', not '{meant}'" in line and f"{key} = '{meant}'" in line, line
-    with pytest.raises(GearlabInputError, match=f"did you mean '{meant}'"):  # the 'unit' key's refusal, as before
+    with pytest.raises(GearlabInputError, match=f"did you mean '{meant}'|gain = '{meant}'"):  # the 'unit' key's
         declared_unit(unit, "s.toml: [target] key 'unit'")
     if keys is not None:  # the key the refusal names reads the file
         got = read_recording(path, "acc", **keys)
@@ -103,3 +103,13 @@ def test_inspect_names_the_option_that_reads_a_stated_unit_in_another_case(tmp_p
     assert units.endswith("e.g. --unit 'g')"), units
     code, out, err = cli("inspect", path, "--vibration", "acc", "--speed", "25 Hz", "--unit", "g")
     assert code == 0 and "not m/s²" not in out and "in g" in out, (out, err)
+
+
+def test_a_full_scale_given_as_the_unit_key_is_refused_naming_the_gain(tmp_path):
+    # unit = "50 g" was read as g, its 50 dropped: the values 50 x too small, unsaid
+    from gearlab.errors import GearlabInputError
+
+    np.savez(tmp_path / "n.npz", acc=ACC / (50 * G), fs=FS)
+    said = r"key 'unit': '50 g' is a full scale, not a unit; .*\(gain = '50 g'\)$"
+    with pytest.raises(GearlabInputError, match=said):
+        read_recording(tmp_path / "n.npz", "acc", unit="50 g", where="s.toml: [target]")

@@ -182,6 +182,11 @@ def declared_unit(value, where: str):
     if value in (None, "") or value in UNITS:
         return value
     read = _VOLTS_SPELLED.get(re.sub(r"\s", "", value).lower()) if isinstance(value, str) else None
+    if isinstance(value, str) and value.strip()[:1].isdigit():  # '50 g' was read as g, its 50 dropped: 50 x off
+        raise GearlabInputError(
+            f"{where}: {shown(value)} is a full scale, not a unit; expected a unit ({', '.join(UNITS)}), or no unit "
+            f"and the full scale as the gain (gain = {shown(miscased(value) or value)})"
+        )
     # any other acceleration or volt a name may end in ('mg', 'mm/s²', 'in/s^2', 'uV'): was refused; the symbols'
     # case stays as said above ('G', 'MV', 'mG' refused: miscased)
     cased = isinstance(value, str) and "G" not in value and not miscased(value)
