@@ -7,6 +7,7 @@ from pathlib import Path
 import pytest
 from conftest import ROOT, unrendered
 from test_tui import checked
+from test_tui_edges import stiff_text
 from textual.widgets import Tree
 
 from gearlab.tui import GearlabApp
@@ -16,15 +17,14 @@ SIZES = [(160, 45), (80, 24)]
 
 @pytest.fixture(scope="module")
 def folder(tmp_path_factory):
-    """A scenarios folder holding a stiffness scenario with one finished quick run."""
+    """A scenarios folder holding a stiffness scenario with one finished quick run (test_tui_edges.stiff_text: the
+    shipped stiffness_verification.toml at 512 points, whose run and charts cost a fraction of 4096's)."""
     from gearlab.engine import run_scenario
 
     base = tmp_path_factory.mktemp("arrows")
     sc = base / "scenarios"
     sc.mkdir()
-    text = (ROOT / "scenarios" / "stiffness_verification.toml").read_text()
-    text = text.split("[output]")[0] + f'\n[output]\ndir = "{base / "runs"}"\n'
-    (sc / "stiff.toml").write_text(text)
+    (sc / "stiff.toml").write_text(stiff_text() + f'\n[output]\ndir = "{base / "runs"}"\n')
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr("gearlab.plots.save", unrendered)  # these tests show no figure's pixels
         run_scenario(sc / "stiff.toml", quick=True)
