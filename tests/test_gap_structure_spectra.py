@@ -1,7 +1,8 @@
-"""The structure check (gearlab/gap/structure.py) takes each history's spectrum once (structure_later.Spectra): it reads
-the revolutions several ways (mesh_check, inspect's stages, a tacho's misread, what passed unchecked, the later
-stages), and a long history's spectrum and running median cost seconds a reading. Read once or read afresh each time,
-the check says the same line and records the same readings."""
+"""The structure check (gearlab/gap/structure.py) takes each history's spectrum, and inspect's reading of it
+(gearbox.match.check_description) against each description, once (structure_later.Spectra): it reads the revolutions
+several ways (mesh_check, inspect's stages, a tacho's misread, what passed unchecked, the later stages), and a long
+history's spectrum and running median cost seconds a reading. Read once or read afresh each time, the check says the
+same line and records the same readings."""
 
 import math
 
@@ -13,6 +14,7 @@ import gearlab.signals
 from gearlab.data.chain import Chain
 from gearlab.gap import structure
 from gearlab.gap.structure_later import Spectra
+from gearlab.gearbox import match
 
 TRAIN = ((22, 71), (27, 86))
 
@@ -30,11 +32,16 @@ def _rows(n: int = 240, points: int = 1024, seed: int = 0) -> np.ndarray:
 
 
 class _Afresh(Spectra):
-    """Every reading taken anew, as each reader took it before the check shared them."""
+    """Every reading taken anew, as each reader took it before the check shared them: inspect's with the tacho's
+    shaft as the reader gave it (0 for the input too)."""
 
     def _entry(self, rows) -> dict:
         self._read.clear()
         return super()._entry(rows)
+
+    def check(self, rows, max_order, box, on_input, tacho_shaft=None, beyond=()) -> dict:
+        lines = self.lines(rows, max_order)
+        return match.check_description(lines, box, rows.shape[0], on_input, tacho_shaft, beyond)
 
 
 @pytest.fixture
@@ -42,6 +49,21 @@ def counted(monkeypatch):
     calls = []
     spectrum = gearlab.signals.spectrum
     monkeypatch.setattr(gearlab.signals, "spectrum", lambda *a: calls.append(a[0].size) or spectrum(*a))
+    return calls
+
+
+@pytest.fixture
+def inspected(monkeypatch):
+    """The readings check_description is asked for: (the lines read, the description, revolutions, the tacho read
+    on the input, its shaft, the stages beyond)."""
+    calls = []
+    check = match.check_description
+
+    def counted(lines, box, n, on_input, tacho_shaft=None, beyond=()):
+        calls.append((id(lines), box, n, on_input, tacho_shaft, tuple(beyond)))
+        return check(lines, box, n, on_input, tacho_shaft, beyond)
+
+    monkeypatch.setattr(match, "check_description", counted)
     return calls
 
 
@@ -60,7 +82,7 @@ NO_TACHO = dict(speed_from_mesh=True, described_speed=25.0)  # the speed from th
     ],
 )
 def test_the_structure_check_reads_each_history_s_spectrum_once_and_says_the_same(
-    counted, described, takes, read, histories
+    counted, inspected, described, takes, read, histories
 ):
     rows, pair = _rows(), described_pair(*described)
 
@@ -73,8 +95,13 @@ def test_the_structure_check_reads_each_history_s_spectrum_once_and_says_the_sam
 
     once = check(None)
     assert len(counted) == histories
+    # inspect's reading of a history against a description: once each (the first stage's pair, the train)
+    assert len(inspected) == len(set(inspected)) <= 2 * histories
+    taken = len(inspected)
     counted.clear()
+    inspected.clear()
     afresh = check(_Afresh())
     assert len(counted) > histories  # the readers do read the revolutions more than once
+    assert len(inspected) >= taken  # ... and ask inspect's reading of them again (a train read right: 6 for 4)
     assert repr(once) == repr(afresh)
     assert (once[0] is None) == (described == TRAIN)

@@ -28,7 +28,7 @@ import numpy as np
 from ..gearbox.match import MIN_TEETH, OFF_COMB, ON_MESH, STRONGEST, tacho_elsewhere, tacho_shaft_words
 from ..gearbox.speed import TEETH_AGREE
 from ..inspect_tacho import marks_words
-from .structure_later import Spectra, _lines, _PairDescription, later_stages, wheel_line
+from .structure_later import Spectra, _inspected, _lines, _PairDescription, later_stages, wheel_line
 from .structure_later import _outshone as _outshone  # where tests/test_outside_user reads it
 
 # A target whose strongest lines (STRONGEST, above order MIN_TEETH) hold at least this share of their
@@ -83,17 +83,16 @@ def mesh_check(
     revolutions are the input shaft's turns (its order is 1, not read off its sidebands: a tacho there,
     or a simulation); a tacho on another shaft makes them its turns times the described ratio. *spectra*: the
     structure check's readings (structure_later.Spectra), or None."""
-    from ..gearbox.match import check_description, tol_mesh
+    from ..gearbox.match import tol_mesh
 
     spectra = spectra or Spectra()
     n = target.shape[0]
     orders, amp = spectra.spectrum(target)
     lines = spectra.lines(target, max_order)
     # the later stages' lines are no sidebands of the first (their shafts but the first wheel's)
-    beyond = [(mesh, shafts[1:] if i == 0 else shafts) for i, (mesh, shafts) in enumerate(later)]
-    check = check_description(
-        lines, _PairDescription.of(z1, z2), n, on_input, None if tacho is None else tacho[1], beyond
-    )
+    beyond = tuple((mesh, shafts[1:] if i == 0 else shafts) for i, (mesh, shafts) in enumerate(later))
+    read_on = None if tacho is None else tacho[1]
+    check = spectra.check(target, max_order, _PairDescription.of(z1, z2), on_input, read_on, beyond)
     # ranked by the spectrum at the line's bin: the parabola's height overshoots where a noise-free
     # record's neighbouring bins are rounding (a line at order 1808 ranked above the mesh harmonics)
     x = lines.at[lines.at >= MIN_TEETH - 0.5]
@@ -550,11 +549,10 @@ def _traded_line(
 def _inspect_unchecked(target, pair, max_order: int, on_input: bool, tacho, spectra=None) -> list[str]:
     """gearbox.match.unchecked of *target*'s revolutions read against *pair*'s train as inspect reads a record
     (the input's order 1 where *on_input*, a tacho's shaft index from *tacho*: _tacho_read), no speed found."""
-    from ..gearbox.match import check_description, unchecked
+    from ..gearbox.match import unchecked
 
     box = _PairDescription.train(pair)
-    read = check_description(_lines(target, max_order, spectra), box, target.shape[0], on_input, tacho and tacho[1])
-    return unchecked(read, box, None)
+    return unchecked(_inspected(target, max_order, box, on_input, tacho and tacho[1], spectra), box, None)
 
 
 def unchecked_record(unresolved: list[str], takes: tuple = ()) -> dict:
@@ -576,14 +574,14 @@ def _misread_line(
     """The one line of a tacho read on another shaft with another count of marks a turn than it gives
     (inspect_tacho.misread on the stages as inspect reads them: check_description with the tacho's shaft), or
     None. *tacho*: _tacho_read's; *ppr*: the marks a turn read (None: not known)."""
-    from ..gearbox.match import check_description
     from ..inspect_tacho import misread, misread_line
 
     box = _PairDescription.train(pair)
     _, read, ratio = tacho
     n = target.shape[0]
+    spectra = spectra or Spectra()
     lines = _lines(target, max_order, spectra)
-    check = check_description(lines, box, n, read == 0, read)
+    check = _inspected(target, max_order, box, read == 0, read, spectra)
     found = misread(check, box, box.shafts[read], ppr, ratio, 1.0 / n, lines)
     if found is None:
         return None
@@ -601,10 +599,9 @@ def outward_line(target, pair, max_order: int, tacho: int, record: dict, spectra
     slow, stage 1's mesh at 37.2, 'mesh order 37.2 measured, 38 expected', the pinion unnamed); the
     nearest stage first, the input's side after the output's at one distance."""
     from ..gearbox.leading import inspect_first, outward
-    from ..gearbox.match import check_description
 
     box = _PairDescription.train(pair)
-    stages = check_description(_lines(target, max_order, spectra), box, target.shape[0], tacho == 0, tacho)["stages"]
+    stages = _inspected(target, max_order, box, tacho == 0, tacho, spectra)["stages"]
     found = inspect_first(stages) or outward(stages, box, tacho)
     if found is None:
         return None
@@ -616,10 +613,9 @@ def _no_tacho_line(target, pair, max_order: int, record: dict, spectra=None) -> 
     """outward_line of a multi-stage train's record without a tacho, read as inspect reads one (no shaft's
     order given), from the input shaft, when inspect finds the first mesh where described; else None."""
     from ..gearbox.leading import inspect_first, outward
-    from ..gearbox.match import check_description
 
     box = _PairDescription.train(pair)
-    stages = check_description(_lines(target, max_order, spectra), box, target.shape[0], False, None)["stages"]
+    stages = _inspected(target, max_order, box, False, None, spectra)["stages"]
     if len(stages) < 2 or not stages[0].get("matched"):
         return None
     origin = "the input shaft (no tacho: its speed from the mesh lines)"

@@ -48,12 +48,13 @@ class _PairDescription:
 
 
 class Spectra:
-    """The spectra and lines of the revolutions one structure check reads (structure.structure_line): it reads one
-    history several ways (mesh_check, inspect's stages, a tacho's misread, what passed unchecked), and a long history's
-    spectrum and running median cost seconds a reading (a three-stage box's 7 takes of 20 s at 20 kHz: ~45 s each).
-    Made per check and dropped with it. Keyed on the rows' memory, shape and strides (a view of the same revolutions
-    is the same rows), each held while the check lasts so no other array is given their memory; read-only, so no
-    reading changes what the next one reads."""
+    """The spectra, lines and inspect's readings of the revolutions one structure check reads
+    (structure.structure_line): it reads one history several ways (mesh_check, inspect's stages, a tacho's misread,
+    what passed unchecked), and a long history's spectrum and running median cost seconds a reading (a three-stage
+    box's 7 takes of 20 s at 20 kHz: ~45 s each), check_description a quarter of a second. Made per check and dropped
+    with it. Keyed on the rows' memory, shape and strides (a view of the same revolutions is the same rows), each held
+    while the check lasts so no other array is given their memory; read-only, so no reading changes what the next one
+    reads."""
 
     def __init__(self) -> None:
         self._read: dict = {}
@@ -87,11 +88,34 @@ class Spectra:
             entry[max_order] = found
         return entry[max_order]
 
+    def check(self, rows, max_order: int, box, on_input: bool, tacho_shaft: int | None = None, beyond=()) -> dict:
+        """gearbox.match.check_description of revolutions *rows*' lines (up to *max_order*) against *box*, its tacho
+        on the input (*on_input*) or on shaft *tacho_shaft*, the stages *beyond* it left out: taken once a check for
+        each such reading (read-only: its readers take from it, none changes it). A tacho on the input is read alike
+        given as shaft 0 or as none (check_description reads shaft 0 as no later shaft), so both are one reading."""
+        from ..gearbox.match import check_description
+
+        tacho_shaft = None if on_input and tacho_shaft == 0 else tacho_shaft
+        key = ("check", max_order, box, bool(on_input), tacho_shaft, tuple(beyond))
+        entry = self._entry(rows)
+        if key not in entry:
+            lines = self.lines(rows, max_order)
+            entry[key] = check_description(lines, box, entry["rows"].shape[0], on_input, tacho_shaft, beyond)
+        return entry[key]
+
 
 def _lines(rows: np.ndarray, max_order: int, spectra: Spectra | None = None):
     """The spectral lines of revolutions *rows* (n, P) laid end to end, as `gearlab inspect` reads a record; read
     once per structure check where its *spectra* are given."""
     return (spectra or Spectra()).lines(rows, max_order)
+
+
+def _inspected(
+    rows: np.ndarray, max_order: int, box, on_input: bool, tacho_shaft=None, spectra: Spectra | None = None
+) -> dict:
+    """gearbox.match.check_description of revolutions *rows* against *box* as `gearlab inspect` reads a record (its
+    tacho on the input, or on shaft *tacho_shaft*); taken once per structure check where its *spectra* are given."""
+    return (spectra or Spectra()).check(rows, max_order, box, on_input, tacho_shaft)
 
 
 def wheel_line(mesh: dict, z2: int, role: str = "wheel") -> str | None:
@@ -147,18 +171,19 @@ def later_stages(
     expected, source, target}], 'line': the one line of the first difference, or None}. *spectra*: the structure
     check's readings (Spectra), or None."""
     from ..gearbox import order_table
-    from ..gearbox.match import check_description, tol_mesh, wheel_upstream
+    from ..gearbox.match import tol_mesh, wheel_upstream
 
     box = _PairDescription.train(pair)
     out: dict = {"stages": [], "line": None}
     if len(box.stages) < 2:
         return out
+    spectra = spectra or Spectra()  # each history's lines and inspect's reading of them: one spectrum
     table = order_table(box)
     read = {}
     for name, rows in (("target", target), ("source", source)):
         if rows is not None:  # no source: a measured target read against the description alone
             lines = _lines(rows, max_order, spectra)
-            check = check_description(lines, box, rows.shape[0], True)
+            check = _inspected(rows, max_order, box, True, None, spectra)
             read[name] = (lines, rows.shape[0], check["stages"])
     for k in range(1, len(box.stages)):
         t, s = read["target"][2][k], read["source"][2][k] if source is not None else {}
