@@ -248,6 +248,7 @@ def channel_scale(
     mV are volts / 1000). *where*: the scenario table, for the one-line errors naming its key (or *flag*(key): a
     command's option); *integer*: the channel holds integer counts (a sensitivity then needs a gain); *path*: the
     file, where *where* is not it."""
+    of = f" of {path}" if path else ""
 
     def at(key: str) -> str:
         return f"{where}: {flag(key)}" if flag else f"{where} key '{key}'"
@@ -255,7 +256,7 @@ def channel_scale(
     for text, by in ((name, "as its name says"), (f"[{unit}]" if unit else "", f"as the file's unit '{unit}' says")):
         if other := _other_quantity(text):  # a velocity read as m/s² was no gearbox's acceleration, unsaid
             raise GearlabInputError(
-                f"{at('vibration')}: channel '{name}' ({by}); expected an acceleration (m/s², g) or an "
+                f"{at('vibration')}: channel '{name}'{of} ({by}); expected an acceleration (m/s², g) or an "
                 f"accelerometer's volts, not a {other[0]} in {other[1]}: record the accelerometer's own signal"
             )
     said, says, keyed = name_unit(name), "as its name says", False
@@ -274,7 +275,7 @@ def channel_scale(
         given = name_unit(f"[{declared}]")
         if said is not None and (said[0], said[2]) != (given[0], given[2]):  # m/s^2 and ms2 agree
             raise GearlabInputError(
-                f"{at('unit')}: '{declared}' contradicts channel '{name}', which is in {said[1]} ({says}); "
+                f"{at('unit')}: '{declared}' contradicts channel '{name}'{of}, which is in {said[1]} ({says}); "
                 f"expected no unit (or '{said[1]}')"
             )
         if said is None:
