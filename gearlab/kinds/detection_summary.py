@@ -13,7 +13,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..signals.nonsync import HUM
-from .detection_level import LEVEL_WORDS, REVERSED_CALL, most_called
+from .detection_level import LEVEL_WORDS, REVERSED_CALL, called_level, most_called
 from .detection_records import longest_tsa
 from .detection_verdict import OTHER_NONSYNC, detection_lines, watched_calls
 from .detection_which_gear import OTHER, UNDETERMINED, WATCHED, is_level_change, judged_unit
@@ -55,6 +55,14 @@ def _level(summary: Mapping, condition: str, path: str) -> str:
     said = ((summary.get("conditions") or {}).get(condition) or {}).get("warnings") or []
     off = next((w for w in said if w.startswith(f"{path}: level ")), None)
     return "" if off is None else off.removeprefix(f"{path}: ").split(" (")[0]
+
+
+def _drift(summary: Mapping, condition: str, path: str, called: bool, named) -> str:
+    """detection_level.called_level's words of *path*'s level, from the run's conditions (their level_ratio and
+    level_spread); "" where it says none or the run kept no ratio."""
+    cond = (summary.get("conditions") or {}).get(condition) or {}
+    ratio = (cond.get("level_ratio") or {}).get(path)
+    return "" if ratio is None else called_level(called, named, ratio, cond.get("level_spread"))
 
 
 def _clipped(summary: Mapping, condition: str, path: str) -> str:
@@ -151,8 +159,13 @@ def take_lines(summary: Mapping, records: list[Mapping], unit: str) -> list[str]
         moved = is_level_change(call) and called  # its level, not damage (level_call): said so
         if moved:
             said.append(f"{call}; {sure}, on no gear localised {largest}: not counted as the watched gear's fault")
+        # a take called on no gear at a level off its history's, within a level change's limit: its level said here
+        # as gearlab score says it first (a healthy take at 1.2 x its one-load history's, called by NA4 and the
+        # template methods, had its level among the warnings under the tables alone)
+        drift = _drift(summary, condition, path, bool(called), take.get("named"))
         if not said and called:
-            said.append(f"{sure}, on no gear localised {largest}: the watched gear's fault by the run's rule")
+            rule = f"{sure}, on no gear localised {largest}: the watched gear's fault by the run's rule"
+            said.append(rule + (f"; its {drift}" if drift else ""))
         said = (
             [f"{level}: record a history at this load (or gain) before acting on what follows"]
             if level and not moved
@@ -171,6 +184,7 @@ def take_lines(summary: Mapping, records: list[Mapping], unit: str) -> list[str]
         todo = "look at that gear" if take.get("named") else ""
         todo += (" and the bearings" if todo else "look at the bearings") if OTHER_NONSYNC in call else ""
         todo = todo or ("look at the watched gear" if called and call.startswith(WATCHED) else "")
+        todo += ", or record a history at this take's load (or gain)" if todo and drift else ""
         todo = "" if level or clip or turned else todo
         lines.append(f"take {_name(path)}: " + "; ".join(said) + (f"; {todo}." if todo else "."))
     if quiet:
