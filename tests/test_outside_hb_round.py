@@ -107,6 +107,11 @@ def test_a_mat_files_unit_text_is_no_channel_and_its_unit_is_checked_at_validate
     code, out, err = cli("validate", _scenario(tmp_path, "h.mat", "v.mat"))
     assert code == 2, out
     assert err.count("\n") == 1 and "key 'vibration'" in err and "v.mat" in err and "velocity in mm/s" in err, err
+    # a struct's 'units' field (MATLAB's struct('acc', x, 'fs', 5000, 'units', 'mm/s')) as well
+    for name, unit in (("good.mat", "m/s^2"), ("struct.mat", "mm/s")):
+        scipy.io.savemat(tmp_path / name, {"rec": {"acc": a[:, None], "fs": FS_B, "units": unit}}, format="5")
+    code, out, err = cli("validate", _scenario(tmp_path, "good.mat", "struct.mat", 'vibration = "rec/acc"\n'))
+    assert code == 2 and "struct.mat" in err and "velocity in mm/s" in err, (out, err)
 
 
 @pytest.fixture(scope="module")

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import GearlabInputError
-from .base import is_rate_or_time, is_unit_entry, matrix_column, not_time
+from .base import is_rate_or_time, matrix_column, not_time, stated_units
 from .rates import SECONDS_PER_DAY, in_hz, key_of, named, scale_of, serial_days, stated_hz
 
 
@@ -415,29 +415,15 @@ def _mat_header(path: Path) -> Header:
     with path.open("rb") as f:
         if 0 in f.read(4):  # v4 (how scipy tells it from v5)
             return _mat4_header(path)
-    every, fields, shapes, scalars = mat5_header(path)  # the elements' headers: the data seeked past, never read
+    every, fields, shapes, scalars, texts = mat5_header(path)  # the elements' headers: the data seeked past
     names = [n for n in every if n and not n.startswith("__")]
     names += fields  # a scalar struct's fields, by path
-    texts = [n for n in names if is_unit_entry(n) and n not in shapes]  # a unit's text ('acc_unit') is no channel
-    names = [n for n in names if n not in texts]
+    names = [n for n in names if n not in texts]  # a unit's text ('acc_unit', a struct's 'units') is no channel
     rate = any(is_rate_or_time(n.rsplit("/", 1)[-1]) for n in names)
     shapes = {n: tuple(shape) for n, shape in shapes.items() if n in names}
     stated = _rate_variable({n: s for n, s in shapes.items() if n in scalars}, scalars.get)
-    units = _mat_units(path, [n for n in texts if "/" not in n], names)
+    units = stated_units(texts, names)
     return Header("MATLAB", names, rate, nested=bool(fields), shapes=shapes, stated=stated, units=units)
-
-
-def _mat_units(path: Path, texts: list[str], names: list[str]) -> dict[str, str]:
-    """{channel: unit} the top-level text variables *texts* state ('acc_unit', 'units'), as the reader reads them:
-    those few bytes alone loaded (a struct's unit field is read with its data, by the reader)."""
-    if not texts:
-        return {}
-    from scipy.io import loadmat
-
-    from .matlab import said_units
-
-    variables = loadmat(path, squeeze_me=True, chars_as_strings=True, variable_names=texts)
-    return said_units([*texts, *names], variables.get)
 
 
 def _rate_variable(shapes: dict[str, tuple], read) -> tuple[float, str] | None:

@@ -122,6 +122,7 @@ def said_units(names: Sequence[str], get) -> dict[str, str]:
 # does not follow the layout is refused before scipy sees it.
 
 _MI_INT8, _MI_INT32, _MI_UINT32, _MI_MATRIX, _MI_COMPRESSED, _MI_UTF8 = 1, 5, 6, 14, 15, 16
+_MI_UINT16, _MI_UTF16 = 4, 17  # MATLAB's own characters: two bytes each
 _MI_DATA = frozenset({1, 2, 3, 4, 5, 6, 7, 9, 12, 13, 16, 17, 18})  # the types scipy has a dtype for
 _MI_TEXT = frozenset({_MI_INT8, _MI_UTF8})  # names, class names, field names
 _MI_FORMATS = {1: "b", 2: "B", 3: "h", 4: "H", 5: "i", 6: "I", 7: "f", 9: "d", 12: "q", 13: "Q"}  # struct's codes
@@ -363,6 +364,7 @@ class _Mat5Header:
     def __init__(self, order: str):
         self.order, self.fields, self.shapes = order, [], {}
         self.scalars: dict[str, float] = {}  # one-number variables and fields (a rate stored as data): 8 bytes each
+        self.texts: dict[str, str] = {}  # unit entries' text ('acc_unit', a struct's 'units'), by name or path
 
     def tag(self, s: _Stream, end: int) -> tuple[int, int, bytes | None]:
         """(type, size, the data of a small element or None) of the element at the stream's position."""
@@ -421,6 +423,11 @@ class _Mat5Header:
                     self.scalars[here] = float(struct.unpack_from(self.order + code, raw)[0])
                 self.fields += [] if path is None else [path]
                 return name
+        if mclass == _MX_CHAR and here and (depth == 0 or path is not None) and is_unit_entry(here):
+            kind, raw = self.element(s, end, 1 << 16)  # a unit's few characters, as said_units reads them
+            codec = ("utf-16-le" if self.order == "<" else "utf-16-be") if kind in (_MI_UINT16, _MI_UTF16) else "utf-8"
+            self.texts[here] = bytes(raw).decode(codec, "replace")
+            return name
         scalar_struct = mclass == _MX_STRUCT and count == 1
         if depth == 0 and not scalar_struct:
             return name  # a variable's data: unread
@@ -460,10 +467,10 @@ class _Mat5Header:
         s.skip(after - s.at)
 
 
-def mat5_header(path: Path) -> tuple[list[str], list[str], dict[str, tuple], dict[str, float]]:
+def mat5_header(path: Path) -> tuple[list[str], list[str], dict[str, tuple], dict[str, float], dict[str, str]]:
     """(variable names, a scalar struct's field paths "rec/acc", numeric variables' and fields' shapes, the
-    one-number ones' values) of a MATLAB v5 file, as _mat5_variables lists them, from its elements' headers alone
-    (and each one-number variable's few bytes)."""
+    one-number ones' values, the unit entries' texts) of a MATLAB v5 file, as _mat5_variables lists them, from its
+    elements' headers alone (and each one-number variable's and unit text's few bytes)."""
     total = path.stat().st_size
     with path.open("rb") as f:
         head = f.read(128)
@@ -486,4 +493,4 @@ def mat5_header(path: Path) -> tuple[list[str], list[str], dict[str, tuple], dic
             if kind != _MI_MATRIX:
                 raise ValueError(f"a variable of element type {kind}, expected a matrix")
             names.append(walk.body(s, end, 0))
-    return names, walk.fields, walk.shapes, walk.scalars
+    return names, walk.fields, walk.shapes, walk.scalars, walk.texts
