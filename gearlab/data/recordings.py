@@ -556,8 +556,8 @@ def shaft_angle(
     if tacho_shaft is not None and tacho_shaft.turns != 1:  # a slower or faster shaft: angle / turns is the input's
         source, angle, how = shaft_angle(rec, kind=kind, pulses_per_rev=pulses_per_rev, smooth=tacho_shaft.turns < 1)
         angle = angle / float(tacho_shaft.turns)
-        cut = unwrap_tacho(wrap(angle))  # the angle it returns keeps the turns from the tacho's zero (numbers)
-        return {"tacho": wrap(angle)}, cut + (angle[0] - cut[0]), f"{how} on the {tacho_shaft.name} shaft"
+        cut = unwrap_tacho(wrapped := wrap(angle))  # the angle it returns keeps the tacho's zero's turns (numbers)
+        return {"tacho": wrapped}, cut + (angle[0] - cut[0]), f"{how} on the {tacho_shaft.name} shaft"
     found_kind = kind if kind != "auto" else ("pulses" if pulses_per_rev > 1 else tacho_kind(rec.tacho))
     detected = ", detected" if kind == "auto" and pulses_per_rev == 1 else ""
     if found_kind == "angle":
@@ -579,7 +579,7 @@ def shaft_angle(
     angle = angle / pulses_per_rev
     # the wrapped angle in [-π, π): cut_revolutions unwraps it and starts revolutions at its 2πk crossings
     how = f"tacho '{name}' ({pulses_per_rev} pulses per revolution{mended})"
-    return {"tacho": wrap(angle)}, unwrap_tacho(wrap(angle)), how
+    return {"tacho": (wrapped := wrap(angle))}, unwrap_tacho(wrapped), how  # wrapped once
 
 
 def steady_start(

@@ -189,7 +189,25 @@ def unwrap_tacho(tacho: np.ndarray) -> np.ndarray:
             "(2π rad): expected the wrapped shaft angle in radians, e.g. in [-π, π) "
             "(degrees? multiply by π/180; already continuous? use it as the angle directly)"
         )
-    return np.unwrap(tacho)
+    return _unwrapped(tacho)
+
+
+def _unwrapped(p: np.ndarray) -> np.ndarray:
+    """np.unwrap(p) (period 2π, discont π), bit for bit on its values, its corrections summed only where they are
+    not zero: a wrap every turn of 100-1000 samples, np.unwrap's mod, masks and cumsum over every sample were most
+    of a take's tacho screen (validate)."""
+    dd = np.diff(p)
+    at = np.flatnonzero(np.abs(dd) >= np.pi)  # np.unwrap zeroes the correction where |dd| < discont
+    if at.size == 0:
+        return p.copy()
+    jump = dd[at]
+    mod = np.mod(jump + np.pi, TWO_PI) - np.pi  # np.unwrap's own arithmetic on these elements
+    np.copyto(mod, np.pi, where=(mod == -np.pi) & (jump > 0))
+    steps = np.concatenate([[0.0], np.cumsum(mod - jump)])  # sequential sums, as np.unwrap's cumsum over zeros
+    counts = np.diff(np.concatenate([[0], at, [dd.size]]))
+    up = p.copy()
+    up[1:] = p[1:] + np.repeat(steps, counts)
+    return up
 
 
 def angle_from_speed(n: int, fs: float, speed_hz: float, phase: float = 0.0) -> np.ndarray:
