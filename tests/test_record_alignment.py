@@ -9,6 +9,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from gearlab.data.textzip import align_to, align_turn
 from gearlab.kinds.detection_records import aligned, register_to_source, tsa_units, without_asynchronous
 from gearlab.parts.measured import TargetFile
 from gearlab.signals.angle import continued
@@ -67,6 +68,21 @@ def test_a_tacho_s_mark_shifts_the_record_by_its_fraction_of_a_turn():
     assert turn == 2  # two thirds on: back in register
     want = np.cos(2 * np.pi * M2 * (np.arange(19 * P) + 2 * P / 3) / P) + np.cos(2 * np.pi * np.arange(19 * P) / P)
     assert np.abs(rows - want.reshape(19, P))[2:-2].max() < 1e-4
+
+
+def test_a_tacho_s_continuous_alignment_is_align_to_s_mark_then_continued_exactly():
+    # the record advanced as one signal needs only align_to's mark (align_turn), not its rows turned on themselves:
+    # the same mark and the same arrays, bit for bit, for marks tried in turn and folded at once (over 4096)
+    reference = _train(FAN, 0, 0).mean(axis=0)
+    record = _train(FAN, 357, 1)
+    for marks in (6, 5000):
+        mark, turned = align_to(reference, record, marks)
+        assert align_turn(reference, record, marks) == mark
+        turn, rows = aligned(reference, record, "tacho", marks, True)
+        assert turn == mark and np.array_equal(rows, continued(record, mark * P / marks))
+        turn, rows = aligned(reference, record, "tacho", marks)
+        assert turn == mark and np.array_equal(rows, turned)
+    assert 0 < mark  # (a record 357 samples on is no mark 0 of 5000)
 
 
 def test_a_whole_order_train_keeps_its_rows():

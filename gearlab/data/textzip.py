@@ -148,7 +148,16 @@ def align_to(reference: np.ndarray, signal: np.ndarray, marks: int) -> tuple[int
 
     Two records of one shaft may start at different tacho marks, i.e. 2πm/N apart; the shift
     is done in the order domain (exact for a periodic, band-limited revolution)."""
-    n = reference.shape[-1]
+    best = align_turn(reference, signal, marks)
+    orders = np.arange(reference.shape[-1] // 2 + 1)
+    phase = np.exp(2j * np.pi * orders * best / marks)
+    shifted = np.fft.irfft(np.fft.rfft(signal, axis=-1) * phase, n=reference.shape[-1], axis=-1)
+    return best, shifted.astype(signal.dtype, copy=False)
+
+
+def align_turn(reference: np.ndarray, signal: np.ndarray, marks: int) -> int:
+    """align_to's m alone: a record advanced as one signal (parts.measured.aligned, continuous) needs no row
+    turned on itself (align_to's FFT of every revolution)."""
     R = np.fft.rfft(reference)
     S = np.fft.rfft(np.mean(np.atleast_2d(signal), axis=0))
     orders = np.arange(R.size)
@@ -166,6 +175,4 @@ def align_to(reference: np.ndarray, signal: np.ndarray, marks: int) -> tuple[int
         folded = np.zeros(marks, dtype=complex)
         np.add.at(folded, orders % marks, np.conj(R) * S)
         best = int(np.argmax(np.real(np.fft.ifft(folded))))
-    phase = np.exp(2j * np.pi * orders * best / marks)
-    shifted = np.fft.irfft(np.fft.rfft(signal, axis=-1) * phase, n=n, axis=-1)
-    return best, shifted.astype(signal.dtype, copy=False)
+    return best

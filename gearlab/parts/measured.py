@@ -21,7 +21,7 @@ from ..data.recordings import (
     pulses_without_tacho,
 )
 from ..data.takes import take_paths
-from ..data.textzip import CALIBRATION, align_to, calibration
+from ..data.textzip import CALIBRATION, align_to, align_turn, calibration
 from ..errors import GearlabInputError, did_you_mean, shown
 from ..files import matched, split_take
 from ..gearbox.orders import settle_turns
@@ -465,8 +465,10 @@ def aligned(
     its last revolution given up), so that mesh runs on from row to row rather than being cut at
     every row's turn, where without_asynchronous's fit of it could not take it out."""
     if tacho is not None:
-        turn, turned = align_to(reference, revs, pulses_per_rev)
-        return turn, continued(revs, turn * revs.shape[-1] / pulses_per_rev) if continuous else turned
+        if continuous:
+            turn = align_turn(reference, revs, pulses_per_rev)
+            return turn, continued(revs, turn * revs.shape[-1] / pulses_per_rev)
+        return align_to(reference, revs, pulses_per_rev)
     n = reference.shape[-1]
     corr = np.fft.irfft(np.conj(np.fft.rfft(reference)) * np.fft.rfft(np.mean(np.atleast_2d(revs), axis=0)), n=n)
     turn = int(np.argmax(corr))
