@@ -334,17 +334,18 @@ def test_order_spectrum_peaks_at_the_shaft_order():
 
 @pytest.mark.parametrize("n", [1009 * 8, 1013 * 6 + 0, 2 * 1009, 3 * 1009, 1009 * 1013, 16 * 1031 * 3])
 def test_a_length_with_a_large_prime_factor_is_transformed_split_and_alike(n, monkeypatch):
-    """signals.spectra._rfft splits a 1-D length with a prime factor of SPLIT_PRIME or more (p x r: numpy's generic
-    radix-r pass costs n r); the spectrum is numpy's own to rounding, odd lengths and a prime row count too."""
+    """signals.spectra._rfft takes a 1-D length with a prime factor of SPLIT_PRIME or more through signals.fft's
+    four-step rfft (numpy's generic radix-r pass costs n r); the spectrum is numpy's own to rounding, odd lengths and a
+    prime row count too."""
     from gearlab.signals import spectra
 
     x = np.random.default_rng(n).standard_normal(n)
     want = np.fft.rfft(x)
     split = []
-    real = spectra._split_rfft
-    monkeypatch.setattr(spectra, "_split_rfft", lambda y, r: split.append(r) or real(y, r))
+    real = spectra.rfft
+    monkeypatch.setattr(spectra, "rfft", lambda y: split.append(y.size) or real(y))
     got = spectra._rfft(x)
-    assert split and split[0] >= spectra.SPLIT_PRIME and n % split[0] == 0
+    assert split == [n]
     assert got.shape == want.shape and np.max(np.abs(got - want)) <= 1e-12 * np.max(np.abs(want))
     # a smooth length, a prime one (numpy's chirp) and a 2-D block stay numpy's own
     smooth, prime = np.random.default_rng(0).standard_normal(4096 * 3), np.random.default_rng(1).standard_normal(4793)

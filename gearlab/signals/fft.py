@@ -26,7 +26,7 @@ SPLIT = 64
 MATMUL = 256
 
 
-def _largest_prime(n: int) -> int:
+def largest_prime(n: int) -> int:
     largest, f = 1, 2
     while f * f <= n:
         while n % f == 0:
@@ -92,7 +92,7 @@ def _columns(x: np.ndarray, p: int, m: int, rows: int) -> np.ndarray:
 
 def _split(n: int) -> int:
     """The prime factor four-step splits a length *n* at; 1 where numpy's own transform is as fast."""
-    p = _largest_prime(n) if n > SPLIT else 1
+    p = largest_prime(n) if n > SPLIT else 1
     return 1 if p < SPLIT or p == n else p
 
 

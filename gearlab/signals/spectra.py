@@ -18,44 +18,23 @@ from functools import lru_cache
 import numpy as np
 
 from .checks import check_array, check_int, check_positive
+from .fft import largest_prime, rfft
 
 # numpy takes the FFT of a length with a large prime factor r by a generic radix-r pass, some n r operations: a
 # history of 4793 revolutions of 4096 points (19.6 M, 4793 prime; gap.structure's check of a three-stage box's
 # takes) took 37-43 s on two busy cores, 2^24 points 4 s. A signal whose length has a prime factor of at least
-# SPLIT_PRIME is transformed as p x r instead (_split_rfft): 15 s there, equal to rounding (2e-16 of the largest
-# amplitude; the same lines found, gearbox.speed.find_lines).
+# SPLIT_PRIME goes through gearlab.signals.fft's four-step rfft instead (1.9 s of CPU there), equal to rounding
+# (1e-15 of the largest amplitude; the same lines found, gearbox.speed.find_lines); shorter factors keep numpy's
+# own transform, bit for bit.
 SPLIT_PRIME = 1000
 
 
-def _largest_prime(n: int) -> int:
-    largest, d = 1, 2
-    while d * d <= n:
-        while n % d == 0:
-            largest, n = d, n // d
-        d += 1
-    return max(largest, n)
-
-
-def _split_rfft(x: np.ndarray, r: int) -> np.ndarray:
-    """np.fft.rfft of 1-D *x* whose length n = p r: p-point FFTs down each of r columns, twiddled, then r-point FFTs
-    along each row (numpy takes a prime length whole by Bluestein's chirp, n log n): X[k1 + p k2] = row k1's k2."""
-    n = x.size
-    p = n // r
-    a = np.fft.fft(x.reshape(p, r), axis=0)
-    for start in range(0, p, 256):  # the twiddles a block of rows at a time: no second n-point array
-        rows = np.arange(start, min(start + 256, p))
-        a[rows] *= np.exp(-2j * np.pi * np.outer(rows, np.arange(r)) / n)
-    a = np.fft.fft(a, axis=1)
-    half = n // 2 + 1
-    return a[:, : -(-half // p)].T.reshape(-1)[:half]
-
-
 def _rfft(x: np.ndarray) -> np.ndarray:
-    """np.fft.rfft along the last axis; a 1-D signal whose length has a prime factor of SPLIT_PRIME or more (not
-    itself prime: numpy takes that by Bluestein's chirp) split as p x r (_split_rfft)."""
-    n = x.shape[-1]
-    r = _largest_prime(n) if x.ndim == 1 and n >= 2 * SPLIT_PRIME else 1
-    return _split_rfft(x, r) if SPLIT_PRIME <= r < n else np.fft.rfft(x, axis=-1)
+    """np.fft.rfft along the last axis; a 1-D signal whose length has a prime factor of SPLIT_PRIME or more by
+    gearlab.signals.fft.rfft (not a prime length itself: numpy takes that by Bluestein's chirp)."""
+    if x.ndim == 1 and x.size >= 2 * SPLIT_PRIME and SPLIT_PRIME <= largest_prime(x.size) < x.size:
+        return rfft(x)
+    return np.fft.rfft(x, axis=-1)
 
 
 def _one_sided_amplitude(x: np.ndarray, window: np.ndarray) -> np.ndarray:
