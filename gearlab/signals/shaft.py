@@ -51,7 +51,7 @@ def shaft_revolutions(
     top = ratio * points / 2  # the shaft's highest order, in input orders
     if max_order:
         top = min(top, float(max_order) + 0.5)
-    spectrum = np.fft.rfft(x)
+    spectrum = rfft(x)  # a prime R: the four-step (signals.fft), not pocketfft's O(n R) pass
     spectrum[int(math.ceil(min(top, P / 2) * R)) :] = 0.0  # bin k: input order k / R
     first = math.ceil(phase - 1e-12)
     count = math.floor(phase + ratio * (n - 1) / P + 1e-12) - first
