@@ -14,9 +14,13 @@ of the same gearbox.
 
 from __future__ import annotations
 
+import dataclasses
+import functools
+
 import numpy as np
 
 from .data import which_gear as W
+from .data import which_gear_cache as C
 from .data.channel_units import level_why
 from .data.recordings import prefixed, tacho_kind
 from .errors import GearlabInputError
@@ -24,6 +28,8 @@ from .gearbox import Gearbox, order_table
 from .gearbox.orders import TachoShaft
 from .inspect import InspectOptions, measured_speed, read_record, settle_speed, unconfirmed
 from .signals import POINTS, resample_revolutions
+from .signals import envelope_sync as E
+from .signals import localise as L
 from .signals import nonsync as NS
 from .signals.checks import revolution_speeds
 from .signals.localise import weakly
@@ -62,6 +68,66 @@ def localisation(path: str, history: list, box: Gearbox, options: InspectOptions
     table = order_table(box)
     revs, first, _, _, speed, fs, turns = input_revolutions(path, box, options)
     read = [(h, options) if isinstance(h, str) else h for h in history]
+    hist, quiet, level, keep = read_history(read, box, options, table)
+    ns = nonsync_lines(revs, quiet, table, speed.mean_hz, turns)
+    if isinstance(hist, GearlabInputError):
+        out = {"method": "", "named": None, "named_shaft": None, "summary": f"not localised: {hist}", "shafts": []}
+    else:  # a non-synchronous call sets the envelope aside, as a detection run does (data.which_gear)
+        take = W.Take(revs, first, speed.mean_hz, fs)
+        try:
+            out = W.which_gear(take, hist, table, W.events(box.source), envelope=not ns.get("changed"))
+        except GearlabInputError as exc:
+            out = {"method": "", "named": None, "named_shaft": None, "summary": f"not localised: {exc}", "shafts": []}
+    keep()  # the envelope's band the take was read in kept too: the next take read in it reads no file again
+    out["history"] = [p for p, _ in read]
+    out["nonsync"] = ns
+    out["call"] = call_of(out, out["nonsync"], speed.mean_hz)
+    # a take at another load than its history's: its call said beside the level, as a run and score warn of it (a 38/103
+    # box's healthy take at 1.5 x its one-load history's mesh level read 'localised change: input pinion 38T', no more)
+    out["level"] = float(np.std(revs)) / level
+    if len(read) == 1 and not out["call"].startswith("no change"):  # its thresholds: one take's own blocks
+        out["call"] += (
+            "; of one history take: how far takes of other days lie apart is not measured, a healthy take may pass "
+            "its thresholds more often than asked (--history two or more takes, from different days)"
+        )
+    if why := level_why(out["level"]):
+        out["call"] += (
+            f"; the take's level {out['level']:.2g} x its history's ({why}): a history at that load "
+            "compares like with like"
+        )
+    return out
+
+
+def read_history(read: list, box: Gearbox, options: InspectOptions, table) -> tuple:
+    """(the history read for localisation, or why not; its non-synchronous residual's (signals.nonsync), or why not;
+    the median of its takes' rms; keep(): kept for later calls, with the envelope's bands read meanwhile) of the
+    history files *read* ((path, InspectOptions) pairs), kept between calls (data.which_gear_cache: the same files,
+    options, gearbox and code read it once; an envelope band not kept yet reads them again)."""
+    files = [C.file_identity(p) for p, _ in read]
+    key = None if None in files else C.key_of("history", files, [o for _, o in read], options, box, table)
+    if key is not None and (kept := C.load("history", key)) is not None:
+        hist, quiet, level = restored_history(kept, table, lambda: _read_history(read, box, options, table)[0].envelope)
+        had = len(kept.get("envelope_read", ()))
+    else:
+        hist, quiet, level = _read_history(read, box, options, table)
+        had = -1
+
+    def keep() -> None:
+        if key is not None and _bands_read(hist) > had:
+            C.save("history", key, kept_arrays(hist, quiet, level))
+
+    return hist, quiet, level, keep
+
+
+def _bands_read(hist) -> int:
+    bank = None if isinstance(hist, GearlabInputError) else hist.envelope
+    if bank is None:
+        return 0
+    return len(bank.histories.read_now()) if isinstance(bank.histories, E.Histories) else len(bank.histories)
+
+
+def _read_history(read: list, box: Gearbox, options: InspectOptions, table) -> tuple:
+    """read_history's reading of the files."""
     past = []
     for p, o in read:
         try:
@@ -81,32 +147,39 @@ def localisation(path: str, history: list, box: Gearbox, options: InspectOptions
         hist = W.history_of(takes, table, marks=max(k for *_, k, _, _, _ in past), tacho=tacho, pulses=pulses)
     except GearlabInputError as exc:
         hist = exc
-    ns = nonsync_lines(revs, [t.revolutions for t in takes], table, speed.mean_hz, turns, takes)
+    try:
+        quiet = NS.history([t.revolutions for t in takes], table, [t.speed_hz for t in takes])
+    except GearlabInputError as exc:
+        quiet = exc
+    return hist, quiet, float(np.median([np.std(t.revolutions) for t in takes]))
+
+
+def kept_arrays(hist, quiet, level: float) -> dict:
+    """read_history's result as plain arrays (as a detection run saves its history for `gearlab score`, the
+    envelope's bands read so far alone: signals.envelope_sync.read_state) or the reasons it was not read."""
+    arrays = {"level": np.array(level)}
     if isinstance(hist, GearlabInputError):
-        out = {"method": "", "named": None, "named_shaft": None, "summary": f"not localised: {hist}", "shafts": []}
-    else:  # a non-synchronous call sets the envelope aside, as a detection run does (data.which_gear)
-        take = W.Take(revs, first, speed.mean_hz, fs)
-        try:
-            out = W.which_gear(take, hist, table, W.events(box.source), envelope=not ns.get("changed"))
-        except GearlabInputError as exc:
-            out = {"method": "", "named": None, "named_shaft": None, "summary": f"not localised: {exc}", "shafts": []}
-    out["history"] = [p for p, _ in read]
-    out["nonsync"] = ns
-    out["call"] = call_of(out, out["nonsync"], speed.mean_hz)
-    # a take at another load than its history's: its call said beside the level, as a run and score warn of it (a 38/103
-    # box's healthy take at 1.5 x its one-load history's mesh level read 'localised change: input pinion 38T', no more)
-    out["level"] = float(np.std(revs)) / float(np.median([np.std(t.revolutions) for t in takes]))
-    if len(takes) == 1 and not out["call"].startswith("no change"):  # its thresholds: one take's own blocks
-        out["call"] += (
-            "; of one history take: how far takes of other days lie apart is not measured, a healthy take may pass "
-            "its thresholds more often than asked (--history two or more takes, from different days)"
-        )
-    if why := level_why(out["level"]):
-        out["call"] += (
-            f"; the take's level {out['level']:.2g} x its history's ({why}): a history at that load "
-            "compares like with like"
-        )
-    return out
+        arrays["history_not_read"] = np.array(str(hist))
+    else:
+        arrays |= hist.state() | E.read_state(hist.envelope)
+    not_read = isinstance(quiet, GearlabInputError)
+    return arrays | ({"nonsync_not_read": np.array(str(quiet))} if not_read else quiet.state())
+
+
+def restored_history(kept: dict, table, envelope) -> tuple:
+    """read_history's result from the arrays it kept; an envelope band not kept from *envelope*() (the history's
+    envelope bank read again) on its first use."""
+    if "history_not_read" in kept:
+        hist = GearlabInputError(str(kept["history_not_read"]))
+    else:
+        again = functools.cache(envelope)
+        bank = E.restored_read(kept, table, again)
+        hist = dataclasses.replace(L.History.restored(kept, table), envelope=bank)
+    if "nonsync_not_read" in kept:
+        quiet = GearlabInputError(str(kept["nonsync_not_read"]))
+    else:
+        quiet = NS.NonSyncHistory.restored(kept, table)
+    return hist, quiet, float(kept["level"])
 
 
 # The take's acquisition options read every history file (one chain, the normal case); a refusal of one of them on a
@@ -124,14 +197,18 @@ def own_key(exc: GearlabInputError) -> str:
 LINES = 5  # the strongest non-synchronous envelope lines shown
 
 
-def nonsync_lines(revs, history: list, table, speed_hz: float, speeds=None, takes: list | None = None) -> dict:
-    """The record's non-synchronous change against the *history* takes' (signals.nonsync, as a detection run
+def nonsync_lines(revs, history, table, speed_hz: float, speeds=None, takes: list | None = None) -> dict:
+    """The record's non-synchronous change against the *history* takes' (a list of their revolutions, or their
+    NonSyncHistory read before, or why it could not be: read_history) (signals.nonsync, as a detection run
     reads it: z of its strongest envelope line, the strike order named, the history's threshold; on a mains harmonic
     read as hum or a bearing's from its revolutions' *speeds* and the history's W.Take *takes*' speeds, where given)
     with the LINES strongest lines' orders and z, strongest first; where the takes are too short for it, why not."""
     try:
-        hist = NS.history(history, table, None if takes is None else [t.speed_hz for t in takes])
-        found, z = NS.read_take(revs, hist, table, speeds)
+        if isinstance(history, GearlabInputError):  # read_history's: the history is too short for it
+            raise history
+        if not isinstance(history, NS.NonSyncHistory):
+            history = NS.history(history, table, None if takes is None else [t.speed_hz for t in takes])
+        found, z = NS.read_take(revs, history, table, speeds)
     except GearlabInputError as exc:
         return {"note": f"not read: {exc}"}
     orders = NS.orders_of_bins(z.size)

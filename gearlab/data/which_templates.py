@@ -4,7 +4,7 @@ gearbox description at the record's speed (noise-free; the description's load: t
 known), with the effects of the simulator it stands for (a detection scenario's [corrected] one: the
 gap diagnosis's fitted structure, which the events' shapes follow). Simulated once per (description,
 effects, speed, rate, fault) in this process (functools cache); each template is read at the caller's
-layout."""
+layout, and kept for later calls at that layout (which_gear_cache)."""
 
 from __future__ import annotations
 
@@ -59,12 +59,23 @@ def simulated_templates(
     *effects*: effect tables ({"name": ..., parameter: SI value}) the records are simulated with."""
     tables = json.dumps(list(effects), sort_keys=True)
     from ..signals import localise as L
+    from . import which_gear_cache as C
 
     gears = [g for on in L.gears_of(table).values() if len(on) == 2 for g in on]
     period = int(table.train_period)
     slowest = min(float(o) for o in table.shaft_orders)
 
     def at(lay) -> dict:
+        # kept between calls (which_gear_cache): an inspect or score of the next take reads them, not simulates
+        key = C.key_of("events", C.description_bytes(gearbox), gearbox, speed_hz, fs, sim_fs, tables, table, lay)
+        if (kept := C.load("events", key)) is not None:
+            return C.events_of(kept, len(KINDS))
+        made = simulated(lay)
+        if "not simulated" not in made:
+            C.save("events", key, C.events_arrays(made))
+        return made
+
+    def simulated(lay) -> dict:
         # grand periods for a grand-period layout; else a few turns of the slowest shaft
         revs = max(PERIODS * period if lay.mode == "grand" else math.ceil(SHAFT_TURNS / slowest), 12)
 

@@ -275,6 +275,11 @@ class Histories(Sequence):
                     self._read = None
             return tuple(self._kept[j] for j in wanted) if isinstance(i, slice) else self._kept[wanted]
 
+    def read_now(self) -> dict[int, L.History]:
+        """{band index: its history} of the bands read so far."""
+        with self._lock:
+            return dict(self._kept)
+
 
 @dataclasses.dataclass(frozen=True)
 class Bank:
@@ -380,6 +385,12 @@ def described(found: L.Localisation, synchronous: str) -> dict:
     return out | {"seen": "envelope"}
 
 
+def _prefix(i: int) -> str:
+    """The prefix of band *i*'s arrays in state(): the whole residual's 'envelope_', as a run saved before the bands
+    were read holds it."""
+    return f"envelope{i}_" if i else "envelope_"
+
+
 def state(bank: Bank | None) -> dict:
     """The arrays (History.state) to save the envelope's bank *bank* with: the whole residual's history prefixed
     'envelope_' (as a run saved before the bands were read holds it), band i's 'envelope{i}_'; {} for None."""
@@ -387,9 +398,45 @@ def state(bank: Bank | None) -> dict:
         return {}
     out = {"envelope_bands": bank.candidates, "envelope_kurtosis": bank.kurtosis}
     for i, h in enumerate(bank.histories[:]):  # every band's: those not read yet are read now
-        prefix = f"envelope{i}_" if i else "envelope_"
-        out |= {prefix + k: v for k, v in h.state().items()}
+        out |= {_prefix(i) + k: v for k, v in h.state().items()}
     return out
+
+
+def read_state(bank: Bank | None) -> dict:
+    """state() of the bands *bank* has read so far alone ('envelope_read': their indices), for a history kept between
+    calls (data.which_gear_cache): reading every band for it would cost a first call more than the cache saves."""
+    if bank is None:
+        return {}
+    kept = bank.histories.read_now() if isinstance(bank.histories, Histories) else dict(enumerate(bank.histories))
+    out = {
+        "envelope_bands": bank.candidates,
+        "envelope_kurtosis": bank.kurtosis,
+        "envelope_read": np.array(sorted(kept)),
+    }
+    for i, h in kept.items():
+        out |= {_prefix(i) + k: v for k, v in h.state().items()}
+    return out
+
+
+def restored_read(arrays: dict, table, rest: Callable[[], Bank]) -> Bank | None:
+    """The bank read_state() saved in *arrays* (None where none was): its saved bands restored, any other read from
+    rest()'s bank (the history's takes read again) on its first use."""
+    if "envelope_read" not in arrays:
+        return None
+    saved = {int(i) for i in np.asarray(arrays["envelope_read"])}
+
+    def read(indices: list[int]) -> list[L.History]:
+        return [
+            L.History.restored(
+                {k.removeprefix(_prefix(i)): v for k, v in arrays.items() if k.startswith(_prefix(i))}, table
+            )
+            if i in saved
+            else rest().histories[i]
+            for i in indices
+        ]
+
+    candidates = np.asarray(arrays["envelope_bands"], dtype=np.float64)
+    return Bank(candidates, Histories(len(candidates), read), np.asarray(arrays["envelope_kurtosis"], dtype=np.float64))
 
 
 def restored(arrays: dict, table) -> Bank | None:
@@ -404,7 +451,7 @@ def restored(arrays: dict, table) -> Bank | None:
     candidates = np.asarray(arrays["envelope_bands"], dtype=np.float64)
 
     def read(indices: list[int]) -> list[L.History]:
-        prefixes = [f"envelope{i}_" if i else "envelope_" for i in indices]
+        prefixes = [_prefix(i) for i in indices]
         return [
             L.History.restored({k.removeprefix(p): v for k, v in arrays.items() if k.startswith(p)}, table)
             for p in prefixes
