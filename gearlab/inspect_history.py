@@ -113,7 +113,9 @@ def read_history(read: list, box: Gearbox, options: InspectOptions, table) -> tu
         had = -1
 
     def keep() -> None:
-        if key is not None and _bands_read(hist) > had:
+        if key is None or not isinstance(hist, (L.History, GearlabInputError)):  # no history read: nothing to keep
+            return
+        if _bands_read(hist) > had:
             C.save("history", key, kept_arrays(hist, quiet, level))
 
     return hist, quiet, level, keep

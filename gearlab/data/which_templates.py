@@ -67,7 +67,8 @@ def simulated_templates(
 
     def at(lay) -> dict:
         # kept between calls (which_gear_cache): an inspect or score of the next take reads them, not simulates
-        key = C.key_of("events", C.description_bytes(gearbox), gearbox, speed_hz, fs, sim_fs, tables, table, lay)
+        how = (KINDS, STEP, PERIODS, SHAFT_TURNS)  # what is simulated: a caller's own kinds are another entry
+        key = C.key_of("events", C.description_bytes(gearbox), gearbox, speed_hz, fs, sim_fs, tables, table, lay, how)
         if (kept := C.load("events", key)) is not None:
             return C.events_of(kept, len(KINDS))
         made = simulated(lay)
