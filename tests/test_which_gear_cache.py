@@ -44,9 +44,9 @@ def counted(monkeypatch):
     seen = {"read": [], "simulated": 0}
     read, simulate = inspect_history.input_revolutions, which_templates._revolutions
 
-    def reading(path, *args):
+    def reading(path, *args, **kwargs):
         seen["read"].append(path)
-        return read(path, *args)
+        return read(path, *args, **kwargs)
 
     def simulating(*args):
         seen["simulated"] += 1
