@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import warnings
 
 import numpy as np
 
@@ -108,15 +109,23 @@ def read_history(read: list, box: Gearbox, options: InspectOptions, table) -> tu
     if key is not None and (kept := C.load("history", key)) is not None:
         hist, quiet, level = restored_history(kept, table, lambda: _read_history(read, box, options, table)[0].envelope)
         had = len(kept.get("envelope_read", ()))
+        said = [str(w) for w in kept.get("warnings", ())]
+        for text in said:  # what the files' first reading warned of (a reader's note), said again
+            warnings.warn(text, stacklevel=2)
     else:
-        hist, quiet, level = _read_history(read, box, options, table)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            hist, quiet, level = _read_history(read, box, options, table)
+        said = [str(w.message) for w in caught]
+        for w in caught:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         had = -1
 
     def keep() -> None:
         if key is None or not isinstance(hist, (L.History, GearlabInputError)):  # no history read: nothing to keep
             return
         if _bands_read(hist) > had:
-            C.save("history", key, kept_arrays(hist, quiet, level))
+            C.save("history", key, kept_arrays(hist, quiet, level) | {"warnings": np.array(said, dtype=str)})
 
     return hist, quiet, level, keep
 

@@ -5,6 +5,7 @@ the events again, says exactly what an uncached call says, and a changed history
 from __future__ import annotations
 
 import json
+import warnings
 
 import pytest
 from gearboxes import description, stage
@@ -118,3 +119,28 @@ def test_an_entry_that_cannot_be_read_is_computed_again(box, counted, tmp_path, 
     counted["read"].clear()
     assert inspected(box, "output") == first
     assert len(counted["read"]) == 1 + len(HISTORY), counted
+
+
+def test_a_cached_history_says_again_what_its_files_first_reading_warned_of(box, tmp_path, monkeypatch):
+    """A reader's note on a history file (a logger's footer left out, say) is printed by every call, not by the one
+    that read the file alone."""
+    from typer.testing import CliRunner
+
+    from gearlab import inspect_history
+    from gearlab.cli import app
+
+    monkeypatch.setenv("GEARLAB_CACHE", str(tmp_path / "cache"))
+    read = inspect_history.input_revolutions
+
+    def noted(path, *args, **kwargs):
+        if kwargs.get("history") and path == box["h2"]:
+            warnings.warn(f"{path}: 3 footer lines left out", stacklevel=2)
+        return read(path, *args, **kwargs)
+
+    monkeypatch.setattr(inspect_history, "input_revolutions", noted)
+    args = ["inspect", box["output"], "--gearbox", box["box"], "--vibration", "acc", "--tacho", "tacho"]
+    args += [a for h in HISTORY for a in ("--history", box[h])]
+    for _ in range(2):
+        with pytest.warns(UserWarning, match="3 footer lines left out"):
+            assert CliRunner().invoke(app, args).exit_code == 0
+    assert list((tmp_path / "cache").glob("which-history-*.npz")), "the second call did not read the cache"
