@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -147,18 +147,9 @@ def read_record(path: str, options: InspectOptions, history: bool = False) -> Re
     if options.tacho is not None:
         tacho = series(contents.found[options.tacho], options.tacho, "tacho", path)
         same_length(tacho, options.tacho, "tacho", vib.size, vibration, path)
+    channels, left_out = [c for c in contents.available if not is_rate_or_time(str(c))], tuple(contents.warnings)
     return Recording(
-        str(path),
-        fmt,
-        [c for c in contents.available if not is_rate_or_time(str(c))],
-        vibration,
-        vib,
-        fs,
-        fs_source,
-        options.tacho,
-        tacho,
-        units,
-        warnings=tuple(contents.warnings),
+        str(path), fmt, channels, vibration, vib, fs, fs_source, options.tacho, tacho, units, warnings=left_out
     )
 
 
@@ -453,14 +444,20 @@ def _read_at_count(rec, box: Gearbox, options, speed: Speed, mesh_hz: float, cou
     return None if off_mesh or off_shaft else (settled, at)
 
 
-def inspect_record(path: str, box: Gearbox | None, options: InspectOptions, read: tuple = ()) -> dict:
+def inspect_record(path: str, box: Gearbox | None, options: InspectOptions, read: tuple = (), kept=None) -> dict:
     """Everything `gearlab inspect` shows, as plain numbers (the TSA curves as arrays). *read*: (the Recording, its
-    flaws) as cut_recording read it, drift out (gearlab score: a 60 s CSV read once, not twice: 9 s of CPU)."""
+    flaws) as cut_recording read it, drift out (gearlab score: a 60 s CSV read once, not twice: 9 s of CPU). *kept*: a
+    list given the record as read and the speed --history cuts its revolutions at (None where its drift taken out
+    changed the signal): localisation reads and follows neither again (a take without a tacho: its speed's search)."""
     rec, flaws = read or (read_record(path, options), ())
+    stored = rec.signal
     if not read:  # read as cut_recording reads it: a drift out, said
         with prefixed(f"{rec.path}: vibration '{rec.vibration}'"):
             rec.signal, flaws = acquisition(rec.signal, rec.fs)
-    speed, reading, no_speed = settle_speed(rec, box, options)
+    speed, reading, no_speed = settle_speed(rec, box, options, measured := measured_speed(rec, box, options))
+    if kept is not None:  # input_revolutions' speed: the measured one, settled where the lines do not confirm it
+        settled = rec.signal is stored and (speed if unconfirmed(rec, box, measured) else measured)
+        kept[:] = replace(rec, signal=stored), settled or None
     fine, orders, amp, top = reading.fine, reading.orders, reading.amp, reading.top
     revolutions, lines = reading.revolutions, reading.lines
     report = {

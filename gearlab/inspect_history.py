@@ -37,14 +37,16 @@ from .signals.localise import weakly
 from .signals.pipeline import first_complete
 
 
-def input_revolutions(path: str, box: Gearbox, options: InspectOptions, history: bool = False) -> tuple:
+def input_revolutions(path: str, box: Gearbox, options: InspectOptions, history: bool = False, taken=()) -> tuple:
     """(complete input revolutions at the pipeline's points, the first one's number from the angle's zero modulo
     the train period, the Nyquist order, the tacho's marks per turn, the speed, the rate, each revolution's speed
-    (Hz; None where not one a revolution)) of one file as read (a *history* file: inspect.read_record's)."""
-    rec = read_record(path, options, history)
-    speed = measured_speed(rec, box, options)
-    if unconfirmed(rec, box, speed):  # read at the speed inspect's rows are read at
-        speed = settle_speed(rec, box, options, speed)[0]
+    (Hz; None where not one a revolution)) of one file as read (a *history* file: inspect.read_record's); *taken*:
+    (its record, its speed or None) as inspect_record kept them, neither read again."""
+    rec, speed = taken or (read_record(path, options, history), None)
+    if speed is None:
+        speed = measured_speed(rec, box, options)
+        if unconfirmed(rec, box, speed):  # read at the speed inspect's rows are read at
+            speed = settle_speed(rec, box, options, speed)[0]
     # without a tacho the angle is zero at the first sample, as a detection's or score's take has it
     angle = speed.angle if rec.tacho is not None else speed.angle - speed.angle[0]
     with prefixed(f"{rec.path}: vibration '{rec.vibration}'"):
@@ -58,16 +60,17 @@ def input_revolutions(path: str, box: Gearbox, options: InspectOptions, history:
     return revs, first, rec.fs / (2 * speed.mean_hz), marks, speed, rec.fs, turns if len(turns) == len(revs) else None
 
 
-def localisation(path: str, history: list, box: Gearbox, options: InspectOptions) -> dict:
+def localisation(path: str, history: list, box: Gearbox, options: InspectOptions, taken: tuple = ()) -> dict:
     """Which shaft and gear the record's synchronous average carries a localised change on, against healthy
     *history* records of the same gearbox, each a path read with the record's *options* or a (path, its own
     InspectOptions) pair: data.which_gear's one decision, as a detection run and `gearlab score` make it (orders
     up to those every history record holds; a shaft's two gears by the description's simulated events at the
-    record's speed and rate, where the history's mesh harmonics agree with the simulation's)."""
+    record's speed and rate, where the history's mesh harmonics agree with the simulation's). *taken*: the record
+    and its speed as inspect_record kept them (input_revolutions)."""
     if not history:
         raise GearlabInputError("--history: give the healthy records of the same gearbox to localise against")
     table = order_table(box)
-    revs, first, _, _, speed, fs, turns = input_revolutions(path, box, options)
+    revs, first, _, _, speed, fs, turns = input_revolutions(path, box, options, taken=taken)
     read = [(h, options) if isinstance(h, str) else h for h in history]
     hist, quiet, level, keep = read_history(read, box, options, table)
     ns = nonsync_lines(revs, quiet, table, speed.mean_hz, turns)

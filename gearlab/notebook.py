@@ -341,10 +341,11 @@ def inspect_recording(
         history_keys = parse_history_keys(history_keys, flag)
     if history_keys and not history:
         raise GearlabInputError(f"{flag('history_key')}: keys of {flag('history')} files; expected those files too")
-    report = inspect_record(str(path), box, checked)
+    taken: list = []  # the take read and its speed followed once: --history's localisation cuts the same
+    report = inspect_record(str(path), box, checked, kept=taken)
     if history:
         read = _history_options([str(h) for h in history], history_keys or {}, options, flag)
-        report["localisation"] = localisation(str(path), read, box, checked)
+        report["localisation"] = localisation(str(path), read, box, checked, tuple(taken))
     return report
 
 
