@@ -72,6 +72,8 @@ class Checking:
                 return result
 
             batch = await in_daemon_thread(read, f"check {pending[0].path.name}")
+            if not self.is_running:  # landed as the app closes, before the worker is cancelled: its tree may be gone
+                return
             landed = [(entry, fresh) for entry, fresh in zip(pending, batch) if not entry.checked]
             for entry, fresh in landed:  # (one checked meanwhile was selected, and validated on the app's thread)
                 entry.gearbox, entry.scenario, entry.error = fresh.gearbox, fresh.scenario, fresh.error
