@@ -59,7 +59,9 @@ class Validating:
 
     @work(group="validate")
     async def _validate_in_thread(self, path: Path) -> None:
-        self._validated(*await in_daemon_thread(lambda: validated_in_thread(path), f"validate {path.name}"))
+        result = await in_daemon_thread(lambda: validated_in_thread(path), f"validate {path.name}")
+        if self.is_running:  # landed as the app closes, before the worker is cancelled: its line may be gone
+            self._validated(*result)
 
     def _validated(self, said: str | None, error: str | None, warned: list[str]) -> None:
         """Back on the app's thread: the result notified, the line hidden, the folder read again."""
