@@ -39,9 +39,10 @@ def box(tmp_path_factory):
 @pytest.fixture(autouse=True)
 def two_kinds(monkeypatch):
     """The events of two fault kinds, not all five (which_templates.KINDS): the file's one uncached simulation of
-    them is of the healthy run and each kind on each gear of the two-gear shaft, 5 runs, not 11 (the file's CPU 44 ->
-    22 s). Two, so that an entry still holds several kinds per gear (events_arrays, events_of); the pinion is named by
-    its own mesh's sidebands, the same with five kinds or two (z = 147, threshold 2.71)."""
+    them is of the healthy run and each kind on each gear of the two-gear shaft, 5 runs, not 11 (the file's CPU 40
+    -> 26 s, the means of three runs each on 2 busy cores). Two, so that an entry still holds several kinds per
+    gear (events_arrays, events_of); the pinion is named by its own mesh's sidebands, the same with five kinds or two
+    (z = 147, threshold 2.71)."""
     from gearlab.data import which_templates
 
     monkeypatch.setattr(which_templates, "KINDS", ("chip", "crack"))
