@@ -156,3 +156,21 @@ def test_a_cached_history_says_again_what_its_files_first_reading_warned_of(box,
         with pytest.warns(UserWarning, match="3 footer lines left out"):
             assert CliRunner().invoke(app, args).exit_code == 0
     assert list((tmp_path / "cache").glob("which-history-*.npz")), "the second call did not read the cache"
+
+
+def test_simulated_events_read_back_are_the_events_kept_gear_by_gear_and_kind_by_kind():
+    """events_of(events_arrays(made)) is made: each gear's events in their kinds' order (the cached events are
+    compared by no test above, whose pinion its own mesh's sidebands name)."""
+    import numpy as np
+
+    from gearlab.data.which_gear_cache import events_arrays, events_of
+
+    rng = np.random.default_rng(0)
+    made = {"healthy": rng.normal(size=8), "gears": {g: [rng.normal(size=8) for _ in range(3)] for g in ("b", "a")}}
+    back = events_of(events_arrays(made), 3)
+    assert list(back["gears"]) == ["b", "a"]
+    np.testing.assert_array_equal(back["healthy"], made["healthy"])
+    for gear, kinds in made["gears"].items():
+        assert len(back["gears"][gear]) == 3
+        for kept, was in zip(back["gears"][gear], kinds, strict=True):
+            np.testing.assert_array_equal(kept, was)
