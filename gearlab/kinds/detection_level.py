@@ -80,6 +80,17 @@ def level_spread(levels) -> float | None:
     return float(np.max(np.abs(np.log(levels / typical)))) if typical > 0 and np.all(levels > 0) else 0.0
 
 
+def history_spread(history) -> float | None:
+    """How far a history's levels reach off their median (level_spread): of two or more takes, their take_levels';
+    of one take, its own turns' (each revolution's standard deviation): a healthy take at 1.2 x a one-take
+    history's level, called by NA4 and the template methods with no gear named, was told nothing of its level, the
+    history's spread unknown; its turns lie within what one load gives a turn. None where no turn is kept."""
+    if len(history) > 1:
+        return level_spread([take_level(r) for r in history])
+    turns = np.asarray(history[0]) if len(history) else np.empty(0)
+    return level_spread(np.std(turns, axis=-1)) if turns.ndim == 2 and len(turns) > 1 else None
+
+
 def take_level(revs) -> float:
     """A take's level: the standard deviation of its revolutions in m/s² as read (spikes bridged; before its units'
     shaft, the standardiser and the alignment), the one measure a run's tables and `gearlab score` compare."""
@@ -122,7 +133,7 @@ def run_levels(cond: dict) -> tuple[dict[str, float], float | None, float]:
     methods have called the takes; both kept in conditions.json) and its history_level (kept for gearlab score)."""
     typical = history_level([r for _, r in cond["history"]])
     ratios = {f.path: level_ratio(take_level(r), typical) for f, r in cond["test"]}
-    return ratios, level_spread([take_level(r) for _, r in cond["history"]]), typical
+    return ratios, history_spread([r for _, r in cond["history"]]), typical
 
 
 def most_called(scores, threshold: float) -> bool:
@@ -137,19 +148,20 @@ def _times(ratio: float) -> str:
     return f"{ratio:.2g}" if f"{ratio:.2g}" != "1" else f"{ratio:.3g}"
 
 
-def called_level(called: bool, named, ratio: float, spread: float | None) -> str:
-    """Of a take *called* a fault, *named* no gear (its localisation's named gears: none) and its level *ratio* to
-    its history's further off than the history's own takes lie (*spread*, their largest |log|), its level in words,
-    where level_line says nothing (within LEVEL_OFF): a sensor's mount loosening -0.1 dB a day was called by the
-    template methods from 0.83 x, its level said from 0.8 x only. "" otherwise, and of a one-take history (*spread*
-    None): level_line's LEVEL_OFF alone says its level."""
+def called_level(called: bool, named, ratio: float, spread: float | None, takes: int = 2) -> str:
+    """Of a take *called* a fault, *named* no gear and its level *ratio* to its history's further off than the
+    history's levels reach (*spread*, history_spread: its *takes*' own or, of one take, its turns'), its level in
+    words, where level_line says nothing (within LEVEL_OFF): a sensor's mount loosening -0.1 dB a day was called by
+    the template methods from 0.83 x, its level said from 0.8 x only. The call is load-uncertain: a history of one
+    load has not seen that level. "" otherwise, and where the spread is unknown (None)."""
     if not called or named or spread is None or level_line(ratio) or abs(math.log(ratio)) <= spread:
         return ""
+    own = "its own takes" if takes > 1 else "its one take's turns"
     return (
-        f"level {_times(ratio)} x its history's, its own takes within {math.expm1(spread):.1%} of it: called with no "
-        "gear named, the call may be the level's change (a sensor's mount or gain, another load?): NA4 and the "
-        "template methods (matched_filter, likelihood_ratio), which subtract the history's average, read a level as a "
-        "change"
+        f"level {_times(ratio)} x its history's, {own} within {math.expm1(spread):.1%} of it: load-uncertain, "
+        "called with no gear named at a level its history has not seen, the call may be the level's change (a "
+        "sensor's mount or gain, another load?): NA4 and the template methods (matched_filter, likelihood_ratio), "
+        "which subtract the history's average, read a level as a change"
     )
 
 
@@ -167,7 +179,8 @@ def called_levels(conditions: dict, records: list[dict], loc: dict | None) -> li
                 if r["condition"] == name and path in r["test_scores"]
                 for u, s in r["test_scores"][path].items()
             )
-            if said := called_level(called, found.get(path, {}).get("named"), ratio, c["level_spread"]):
+            named = found.get(path, {}).get("named")
+            if said := called_level(called, named, ratio, c["level_spread"], len(c.get("history") or ()) or 2):
                 out.append(f"{path}: {said}")
     return out
 

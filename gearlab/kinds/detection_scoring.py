@@ -47,10 +47,10 @@ from .detection_in_band import in_band as shared_in_band
 from .detection_level import (
     called_level,
     clipped_call,
+    history_spread,
     kept_level,
     level_line,
     level_ratio,
-    level_spread,
     most_called,
     reversed_call,
     take_level,
@@ -321,7 +321,7 @@ def _scoring_condition(
         # how far the history's own takes lie off their median level (the largest |log|; its revolutions as stored,
         # their scale not the standardiser's): a take further off, called with no gear named, is told its level
         # whatever LEVEL_OFF says (called_level)
-        "level_spread": level_spread([float(np.std(r)) for _, r in history]),
+        "level_spread": history_spread([r for _, r in history]),
     }
 
 
@@ -674,7 +674,8 @@ def score(
         for f, _ in records:  # the level said where the call may be its change, whichever method's threshold
             mine = [r for r in rows if r["file"] == f.path]
             called = any(r["decision"] == "fault" or is_undetermined(r["decision"]) for r in mine)
-            said = called_level(called, mine[0]["localised"], cond["level_ratio"][f.path], cond["level_spread"])
+            ratio, takes = cond["level_ratio"][f.path], len(cond["history"])
+            said = called_level(called, mine[0]["localised"], ratio, cond["level_spread"], takes)
             for r in mine if said else ():
                 r["level"] = "; ".join(w for w in (said, r["level"]) if w)
             flagged = any(r["decision"] not in ("healthy", "not scored") for r in mine)

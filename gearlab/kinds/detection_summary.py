@@ -62,7 +62,8 @@ def _drift(summary: Mapping, condition: str, path: str, called: bool, named) -> 
     level_spread); "" where it says none or the run kept no ratio."""
     cond = (summary.get("conditions") or {}).get(condition) or {}
     ratio = (cond.get("level_ratio") or {}).get(path)
-    return "" if ratio is None else called_level(called, named, ratio, cond.get("level_spread"))
+    takes = len(cond.get("history") or ()) or 2
+    return "" if ratio is None else called_level(called, named, ratio, cond.get("level_spread"), takes)
 
 
 def _clipped(summary: Mapping, condition: str, path: str) -> str:
