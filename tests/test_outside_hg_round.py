@@ -99,6 +99,28 @@ def test_a_bad_input_is_one_line_at_validate(cli, box_a, change, said):
     assert all(s in err for s in said), err
 
 
+def test_an_amplifier_s_gain_given_as_gain_is_refused_on_decimal_values(cli, box_a):
+    # the guide: 100 mV/g through x10 is sensitivity '1 V/g', not --gain 10 (refused on volts); on a headerless
+    # text, no unit said, '--sensitivity "100 mV/g" --gain 10' read each volt as 10 V: 100 g a file unit, the level
+    # 100 x too high, unsaid, and a scenario's gain = 10 passed validate
+    where, take = box_a
+    keys = A_KEYS[:-1] + ("100 mV/g",)
+    code, out, err = cli("inspect", take, *keys, "--gain", "10", "--speed", "60 Hz")
+    assert "not m/s² (expected no gain (an amplifier's gain goes in the sensitivity" in out, (out[:800], err)
+    scenario = (
+        '[scenario]\nname = "a"\nkind = "detection"\n[source]\ngearbox = "boxA.toml"\nfaults = { chip = [20] }\n'
+        '[target]\nvibration = "0"\ntacho = "1"\nfs = 25600\nsensitivity = "100 mV/g"\ngain = 10\n'
+        'files = [{ file = "take.txt", role = "history", label = "healthy" }, '
+        '{ file = "test.txt", role = "test", label = "fault" }]\n'
+    )
+    (where / "gain.toml").write_text(scenario)
+    code, out, err = cli("validate", where / "gain.toml")
+    assert code == 2 and err.count("\n") == 1 and "key 'gain'" in err and "take.txt" in err, (out, err)
+    (where / "volts.toml").write_text(scenario.replace("gain = 10", 'gain = "10 V"'))  # a unit said: as before
+    code, out, err = cli("validate", where / "volts.toml")
+    assert code == 0, err
+
+
 def test_a_one_take_history_says_a_called_take_off_its_level_is_load_uncertain():
     # a healthy take at 1.2 x a one-take history's level (one load), called by NA4 and the template methods with no
     # gear named: its spread unknown (None), nothing was said of its level under the 1.25 x of a level change, and

@@ -58,6 +58,12 @@ class FileUnitGain(float):
     channel_scale's line says the full scale instead ('(1 V / 196.133 mV/g)' was told of gain = '50 m/s^2')."""
 
 
+class BareGain(float):
+    """A gain given as a bare number (gain = 10, --gain 10), read as volts per file unit: of integer counts, a count's
+    volts; on decimal values of no stated unit (volts, beside a sensitivity) it is an amplifier's x10 given where
+    the sensitivity takes it, their level 100 x too high, unsaid (channel_scale refuses it)."""
+
+
 # JSON keeps a gain as a number: a run's scoring.json keeps a full scale's as these words, so that gearlab score reads
 # and words a file as inspect does (it said '5 g a file unit (1 V / 200 mV/g)' of gain = '5g', the 1 V no one's)
 FULL_SCALE = "full scale"
@@ -291,6 +297,12 @@ def channel_scale(
         raise GearlabInputError(
             f"{at('gain')}: channel '{name}' is in volts already ({said[1]}, {says}); expected no gain (an "
             "amplifier's gain goes in the sensitivity: 100 mV/g at x10 is sensitivity = '1 V/g')"
+        )
+    if said is None and isinstance(gain, BareGain) and not integer and sensitivity is not None:
+        raise GearlabInputError(
+            f"{at('gain')}: {gain:g} with no unit, on the decimal values of channel '{name}'{of}, read as volts; "
+            "expected no gain (an amplifier's gain goes in the sensitivity: 100 mV/g at x10 is sensitivity = "
+            "'1 V/g'), or the volts per file unit with its unit (e.g. '0.3 mV')"
         )
     if said is not None and said[0] == "acceleration":
         for key, value in (("gain", gain), ("sensitivity", sensitivity)):  # a gain in g is read as both

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import GearlabInputError, shown
 from ..units import to_si
-from .channel_units import STANDARD_GRAVITY, FileUnitGain
+from .channel_units import STANDARD_GRAVITY, BareGain, FileUnitGain
 
 __all__ = ["align_to", "calibration", "gain_quantity", "parse_sensitivity"]
 
@@ -123,8 +123,9 @@ def calibration(given: dict, at) -> dict:
             f"{at('gain')}: expected a positive voltage per file unit such as '0.3 mV', got {shown(values['gain'])} "
             "(or a positive acceleration per volt or per file unit, e.g. '50 g')"
         )
-    if unit == "V":
-        return out | {"gain": number}
+    if unit == "V":  # a bare number kept so (BareGain): on decimal values in volts, channel_scale refuses it
+        bare = not isinstance(values["gain"], str) or re.fullmatch(r"\s*[-+.\deE]+\s*", values["gain"])
+        return out | {"gain": BareGain(number) if bare else number}
     if values.get("sensitivity") is not None:
         per = "volt" if unit == "m/s^2/V" else "file unit"
         raise GearlabInputError(
