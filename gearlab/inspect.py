@@ -566,7 +566,7 @@ def inspect_record(path: str, box: Gearbox | None, options: InspectOptions, read
             head = f"the description {name!r} cannot be confirmed without a tacho or the speed: {pinion}"
         elif speed.others:
             head = f"the description {name!r} is consistent with this recording if the input turns at "
-            head += f"{fmt_hz(speed.mean_hz)}: {alternatives_words(speed.others)}"
+            head += f"{fmt_hz(speed.mean_hz)}: {alternatives_words(speed.others, table=order_table(box))}"
         else:
             head = f"the description {name!r} matches this recording"
         report["verdict"] = (

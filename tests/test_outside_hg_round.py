@@ -205,3 +205,51 @@ def test_a_mat_unit_text_in_two_byte_characters_is_read_by_validate_and_inspect(
         code, out, err = cli("validate", tmp_path / "gap.toml")
         assert code == code_expected, (out, err)
     assert err.count("\n") == 1 and "v.mat" in err and "key 'vibration'" in err and "velocity in mm/s" in err, err
+
+
+FS_B, F_B, STAGES_B = 10000.0, 30.0, ((21, 63), (18, 54), (15, 45))
+B_KEYS = ("--vibration", "0", "--gain", "20 g")  # an int16 WAV's unit is its full scale
+BOX_B = description(
+    stage(21, 63, bores=("20 mm", "30 mm")),
+    stage(18, 54, module="3 mm", width="30 mm", bores=("30 mm", "40 mm")),
+    stage(15, 45, module="4 mm", width="40 mm", bores=("40 mm", "60 mm")),
+    name="boxB",
+    speed="30 Hz",
+    load="50 N*m",
+    near="input",
+)
+
+
+@pytest.fixture(scope="module")
+def box_b(tmp_path_factory):
+    """Box B's take as its recorder writes it: an int16 WAV whose full scale is 20 g, no tacho, 4 s."""
+    from scipy.io import wavfile
+
+    where = tmp_path_factory.mktemp("hg_b")
+    (where / "boxB.toml").write_text(BOX_B)
+    (where / "boxB19.toml").write_text(BOX_B.replace("z = 18", "z = 19"))
+    a = _accel(STAGES_B, F_B, FS_B, 4.0, seed=21)[0]
+    wavfile.write(where / "take.wav", int(FS_B), np.round(a / G / 20.0 * 32767).astype(np.int16))
+    return where, where / "take.wav"
+
+
+def test_b_three_stage_wav_reads_its_meshes_and_speed_and_says_why_the_input_count_is_open(cli, box_b):
+    # stage 1's wheel turns once in 3 input turns (21/63): the input's sidebands, 1 order off the first mesh, are the
+    # intermediate 1 shaft's 3rd and are left out, so the pinion's count stays open; inspect said only 'a tacho or
+    # the measured speed (--speed) would decide', though the lines stood clear in the spectrum
+    where, take = box_b
+    code, out, err = cli("inspect", take, "--gearbox", where / "boxB.toml", *B_KEYS, "--json")
+    assert code == 0, err
+    report = json.loads(out)
+    assert abs(report["speed"]["mean_hz"] - F_B) < 0.005 * F_B, report["speed"]
+    measured = [s["measured_order"] for s in report["check"]["stages"]]
+    assert np.allclose(measured, [21, 6, 5 / 3], atol=0.05), measured
+    verdict = report["verdict"]
+    assert "the input turns 3 times a turn of the intermediate 1 shaft" in verdict, verdict
+
+
+def test_b_wrong_count_on_the_intermediate_shaft_is_called_out(cli, box_b):
+    where, take = box_b
+    code, out, err = cli("inspect", take, "--gearbox", where / "boxB19.toml", *B_KEYS)
+    assert code == 0, err
+    assert "stage 2: mesh order 6 measured, 6.333 expected" in out and "described 19" in out, out[-2000:]

@@ -71,12 +71,28 @@ def shaft_line_count(in_hz: Lines, mesh_hz: float, declared: float, df: float, t
     return shaft[0] if len(shaft) == 1 else None
 
 
-def alternatives_words(others: list[tuple], speed_key: str = "--speed") -> str:
+def alternatives_words(others: list[tuple], speed_key: str = "--speed", table=None) -> str:
     """'a 26-tooth pinion at 24.09 Hz gives the same line' for the other counts a mesh line allows; *speed_key*:
-    where the measured speed is given (inspect's option; a scenario's key)."""
+    where the measured speed is given (inspect's option; a scenario's key); with the order *table*, why the input's
+    own lines cannot tell them (hidden_by)."""
     said = [f"a {z}-tooth pinion at {fmt_hz(hz)}" for z, hz in others]
     named = said[0] if len(said) == 1 else ", ".join(said[:-1]) + " or " + said[-1]
-    return f"{named} gives the same mesh line; a tacho or the measured speed ({speed_key}) would decide"
+    why = hidden_by(table) if table is not None else ""
+    return f"{named} gives the same mesh line{why}; a tacho or the measured speed ({speed_key}) would decide"
+
+
+def hidden_by(table) -> str:
+    """Where a later shaft turns once in a whole number of input turns, up to SHAFT_HARMONICS, the input's sidebands
+    and lines are that shaft's harmonic's too and _other_shafts_out leaves them out: a 21/63 + 18/54 + 15/45 box
+    with clear sidebands 1 order off its first mesh was told only 'a tacho or the measured speed would decide'."""
+    for name, o in zip(table.shafts[1:], table.shaft_orders[1:]):
+        turns = 1 / o
+        if turns.denominator == 1 and turns <= SHAFT_HARMONICS:
+            return (
+                f" (the input turns {turns} times a turn of the {name} shaft: its sidebands and lines are that "
+                "shaft's too, and tell no count)"
+            )
+    return ""
 
 
 def no_speed_line(mesh_hz: float | None, declared: float, seen: bool = False) -> str:
