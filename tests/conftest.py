@@ -530,7 +530,6 @@ RENDERED = frozenset(
         "test_dynamics_cli.py",
         "test_detection_figures_pool.py",
         "test_figure_legends.py",
-        "test_outside_e.py",
         "test_hardening.py",  # a full disk: the runs' real PNGs fill it
         "test_your_gearbox.py",  # the guides end to end, as a user runs them
         "test_user_gearbox_e2e.py",
