@@ -203,3 +203,21 @@ def test_a_measured_dataset_target_without_a_described_speed_in_its_chain_is_che
     )
     assert verdict is None and line is None, line
     assert "ambiguous" in record and 37 in dict(record["ambiguous"]["others"]), record
+
+
+def test_the_gap_says_why_the_input_s_own_lines_tell_no_count_where_a_later_shaft_turns_once_in_whole_input_turns():
+    # 21/63 without a tacho: the output turns once in 3 input turns, so the input's sidebands are the output's 3rd
+    # harmonic's and tell no count (as inspect says it, pinion_count.hidden_by); on 21/62 they tell it
+    from gearboxes import described_pair
+
+    from gearlab.data.chain import Chain
+    from gearlab.gap import structure
+
+    chain = Chain(fs=1024 * 25.2236, speed=25.2236, speed_from_mesh=True, described_speed=25.0)
+    rows = _mesh_rows(21, 63, input_sidebands=True)
+    found = structure.count_ambiguity(rows, described_pair((21, 63)), 400, chain)
+    assert found is not None and "(the input turns 3 times a turn of the output shaft: its sidebands" in found["line"]
+    assert (
+        structure.count_ambiguity(_mesh_rows(21, 62, input_sidebands=True), described_pair((21, 62)), 400, chain)
+        is None
+    )

@@ -639,15 +639,17 @@ def count_ambiguity(
     declared = (chain and chain.described_speed) or declared
     if chain is None or not chain.speed_from_mesh or not declared:
         return None
+    from ..gearbox import order_table
     from ..gearbox.pinion_count import alternatives_words
     from ..signals.checks import fmt_hz
 
     _, seen, others = _input_count(target, pair, max_order, chain, declared, spectra)
     if seen is not None or not others:
         return None
+    why = order_table(_PairDescription.train(pair))  # a later shaft's whole turn hides the input's lines: say so
     line = (
         f"the input pinion's tooth count is ambiguous: the description holds if the input turns at "
-        f"{fmt_hz(chain.speed)}; {alternatives_words(others, '[target] speed')}"
+        f"{fmt_hz(chain.speed)}; {alternatives_words(others, '[target] speed', why)}"
     )
     return {"speed_hz": chain.speed, "others": [[int(z), float(hz)] for z, hz in others], "line": line}
 
