@@ -13,55 +13,32 @@ import sys
 import time
 from pathlib import Path
 
+import pool_units
 import pytest
+from pool_units import (
+    divide,
+    first_is_slow,
+    mark_then_wait,
+    module_loaded,
+    read_shared,
+    refuse_three,
+    square,
+    sum_then_spoil,
+    waited_for,
+    worker_pid,
+)
 from tiny import BASELINES_AND_MMD, records, transfer
 
 from gearlab import executors
 from gearlab.errors import GearlabInputError
 from gearlab.executors import LocalExecutor, RayExecutor, Shared, make_executor, ray_address, unshared
 
-# Only light imports at the top: local worker processes import this module to find the mapped
-# functions, and gearlab's runs and kinds pull in torch (seconds per worker).
+# The functions mapped on local pools are pool_units': a worker imports the module of the function it
+# is sent, and this one imports pytest and tests/tiny.py (a second of CPU at each worker's start).
 
 pytestmark = pytest.mark.usefixtures("one_torch_thread")
 
 NO_RAY = "Ray is not installed (pip install 'gearlab[ray]')"
-
-
-# Top-level, so that worker processes can unpickle them.
-def square(x: int) -> int:
-    return x * x
-
-
-def waited_for(path: Path, pattern: str) -> bool:
-    """Whether a file matching *pattern* came into *path* within a minute (a hung test's bound)."""
-    deadline = time.monotonic() + 60.0
-    while not any(path.glob(pattern)):
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.01)
-    return True
-
-
-def first_is_slow(marks: Path | None, x: int) -> int:
-    """Item 0 finishes after another one: on_done sees the finishing order, the results keep the input
-    order. With *marks* (two workers or more) item 0 runs until the caller's on_done has heard of
-    another item (it marks that in *marks*), not for a fixed time that a loaded machine's second
-    worker may not start within, nor until another item merely started (its result may come after
-    item 0's). A minute at most."""
-    if x == 0 and marks is not None:
-        waited_for(marks, "heard-*")
-    return x * x
-
-
-def refuse_three(x: int) -> int:
-    if x == 3:
-        raise GearlabInputError("item 3 is not allowed")
-    return x
-
-
-def divide(x: int) -> float:
-    return 1 / x
 
 
 def gpu_ids(x: int) -> list:
@@ -74,8 +51,9 @@ def gpu_ids(x: int) -> list:
 def ray_session():
     """One local Ray instance for the module; closed at its end so other modules do not pay for it."""
     ray = pytest.importorskip("ray", reason=NO_RAY)
-    # Ray workers cannot import this test module by name (it is not a package): send its functions by value.
+    # Ray workers cannot import these test modules by name (not a package): send their functions by value.
     ray.cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    ray.cloudpickle.register_pickle_by_value(pool_units)
     with pytest.MonkeyPatch.context() as mp:
         mp.delenv("RAY_ADDRESS", raising=False)
         # The instance declares one GPU (Ray does not check that it exists), so that the GPU
@@ -134,23 +112,6 @@ def test_no_items_no_work(executor):
 def test_gpu_request_changes_no_result(executor):
     """Local executors ignore it; a Ray cluster without GPUs asks for none."""
     assert executor.map(square, range(4), gpu=True) == [0, 1, 4, 9]
-
-
-def read_shared(item) -> tuple[int, float]:
-    """What a unit reads of its Shared arrays."""
-    i, shared = item
-    X, rows = unshared(shared)
-    return i, float(X.sum()) + float(rows["r"].sum())
-
-
-def sum_then_spoil(item) -> tuple[int, float]:
-    """What a unit reads of its Shared arrays; then it writes over them (no other unit may see that;
-    on Ray its arrays are read-only)."""
-    seen = read_shared(item)
-    X, rows = unshared(item[1])
-    X[:] = -1.0
-    rows["r"][:] = -1
-    return seen
 
 
 def a_shared_value():
@@ -214,23 +175,6 @@ def test_the_local_pool_sends_a_shared_value_once_and_each_unit_has_its_own(monk
     assert 0 < sum(sent) < 100_000  # 6 x 8 MB before
     assert not list(tmp_path.iterdir())
     assert unshared(shared)[0][0] == 0.0  # the caller's own value untouched
-
-
-def both_workers_took_one(marks: Path) -> None:
-    """Mark this worker's process in *marks*, then wait until two workers have (a minute at most):
-    an item of a two-worker map that calls this runs on each worker, however the machine schedules."""
-    (marks / str(os.getpid())).touch()
-    deadline = time.monotonic() + 60.0
-    while len(list(marks.iterdir())) < 2 and time.monotonic() < deadline:
-        time.sleep(0.01)
-
-
-def module_loaded(marks: Path, name: str) -> bool:
-    """Whether *name* was loaded in this worker, once both workers took an item: one worker cannot
-    take every item while the other still runs its warm-ups (a worker that took both, then was
-    descheduled)."""
-    both_workers_took_one(marks)
-    return name in sys.modules
 
 
 def test_a_warmed_local_pool_has_loaded_the_modules_before_its_units_ask(tmp_path):
@@ -725,21 +669,6 @@ def test_a_real_diagnosis_on_ray_counts_what_it_counts_serially(ray_session):
     assert far["effects"] == serial["effects"] and far["evaluations"] == serial["evaluations"] > 20
 
 
-def _mark_then_wait(task):
-    """Unit 0 fails once another unit runs beside it; the others mark that they started (with their
-    process id, whole once seen: unit 0's failure stops them at once, maybe inside the write) and run
-    until stopped: a minute, never told to end, then they mark that they ended."""
-    folder, i = task
-    if i == 0:
-        waited_for(Path(folder), "started-*")
-        raise GearlabInputError("unit 0 is bad")
-    (Path(folder) / f"writing-{i}").write_text(str(os.getpid()))
-    (Path(folder) / f"writing-{i}").rename(Path(folder) / f"started-{i}")
-    waited_for(Path(folder), "never")
-    (Path(folder) / f"ended-{i}").touch()
-    return i
-
-
 def gone(pid: int) -> bool:
     """Whether process *pid* ended within a minute."""
     deadline = time.monotonic() + 60.0
@@ -756,17 +685,12 @@ def test_a_failed_unit_stops_the_local_pool_at_once(tmp_path):
     """No queued unit starts after a failure (or a Ctrl-C), and the running ones are stopped: their
     processes end, where unstopped they would run on (a minute) and mark that they ended."""
     with pytest.raises(GearlabInputError, match="unit 0 is bad"):
-        LocalExecutor(2).map(_mark_then_wait, [(tmp_path, i) for i in range(5)])
+        LocalExecutor(2).map(mark_then_wait, [(tmp_path, i) for i in range(5)])
     started = list(tmp_path.glob("started-*"))
     assert started and all(gone(int(p.read_text())) for p in started)
     marks = sorted(p.name for p in tmp_path.iterdir())
     assert not any(m.startswith("ended") for m in marks)
     assert len(marks) < 3  # the queued units were dropped (the worker freed by unit 0 may take one)
-
-
-def worker_pid(marks: Path, x: int) -> int:
-    both_workers_took_one(marks)
-    return os.getpid()
 
 
 def test_the_local_pool_is_kept_across_maps_and_closed_at_the_end(tmp_path):
