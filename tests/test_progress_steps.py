@@ -268,19 +268,12 @@ def test_a_gap_rounds_fits_count_their_score_evaluations_on_the_line_beside_the_
     assert seen == sorted(seen) and 0 < seen[0] < 14 and seen[-1] <= 14
 
 
-def evaluations(n: int) -> int:
-    """A fit's stand-in in a worker process: n score evaluations."""
-    from gearlab.gap.tally import counted
-
-    for _ in range(n):
-        counted()
-    return n
-
-
 def test_the_fits_evaluations_are_counted_across_worker_processes(tmp_path):
     """The fits run in the local pool's workers: each writes its count to a file of its own, which
     the run's process sums (gearlab.executors.FileCounts), and returns it with its result (the
     diagnosis's total); without, the workers' counts never reach the line. (Ray: test_executors.)"""
+    from pool_units import evaluations
+
     from gearlab.executors import FileCounts, LocalExecutor
     from gearlab.gap.tally import Tallied
 
