@@ -74,6 +74,16 @@ def test_a_wrong_pinion_count_is_called_out(cli, box_a):
     assert "a 13-tooth pinion on the input shaft? described 14" in out, out[-2000:]
 
 
+def validated_a(chain: str) -> str:
+    """A detection scenario on box A's two takes with the [target] *chain* keys (sensitivity, gain)."""
+    return (
+        '[scenario]\nname = "a"\nkind = "detection"\n[source]\ngearbox = "boxA.toml"\nfaults = { chip = [20] }\n'
+        f'[target]\nvibration = "0"\ntacho = "1"\nfs = 25600\n{chain}\n'
+        'files = [{ file = "take.txt", role = "history", label = "healthy" }, '
+        '{ file = "test.txt", role = "test", label = "fault" }]\n'
+    )
+
+
 @pytest.mark.parametrize(
     "change, said",
     [
@@ -84,12 +94,7 @@ def test_a_wrong_pinion_count_is_called_out(cli, box_a):
 )
 def test_a_bad_input_is_one_line_at_validate(cli, box_a, change, said):
     where, _ = box_a
-    scenario = (
-        '[scenario]\nname = "a"\nkind = "detection"\n[source]\ngearbox = "boxA.toml"\nfaults = { chip = [20] }\n'
-        '[target]\nvibration = "0"\ntacho = "1"\nfs = 25600\nsensitivity = "1 V/g"\n'
-        'files = [{ file = "take.txt", role = "history", label = "healthy" }, '
-        '{ file = "test.txt", role = "test", label = "fault" }]\n'
-    )
+    scenario = validated_a('sensitivity = "1 V/g"')
     (where / "ok.toml").write_text(scenario)
     code, out, err = cli("validate", where / "ok.toml")
     assert code == 0, err
@@ -107,12 +112,7 @@ def test_an_amplifier_s_gain_given_as_gain_is_refused_on_decimal_values(cli, box
     keys = A_KEYS[:-1] + ("100 mV/g",)
     code, out, err = cli("inspect", take, *keys, "--gain", "10", "--speed", "60 Hz")
     assert "not m/s² (expected no gain (an amplifier's gain goes in the sensitivity" in out, (out[:800], err)
-    scenario = (
-        '[scenario]\nname = "a"\nkind = "detection"\n[source]\ngearbox = "boxA.toml"\nfaults = { chip = [20] }\n'
-        '[target]\nvibration = "0"\ntacho = "1"\nfs = 25600\nsensitivity = "100 mV/g"\ngain = 10\n'
-        'files = [{ file = "take.txt", role = "history", label = "healthy" }, '
-        '{ file = "test.txt", role = "test", label = "fault" }]\n'
-    )
+    scenario = validated_a('sensitivity = "100 mV/g"\ngain = 10')
     (where / "gain.toml").write_text(scenario)
     code, out, err = cli("validate", where / "gain.toml")
     assert code == 2 and err.count("\n") == 1 and "key 'gain'" in err and "take.txt" in err, (out, err)
