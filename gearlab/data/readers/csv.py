@@ -44,18 +44,39 @@ _PREAMBLE_FIELD = re.compile(r"^([A-Za-z][\w .\-]*?)\s*(?:[\[(]\s*([^\])]*?)\s*[
 _PREAMBLE_VALUE = re.compile(r"^([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*([A-Za-zµμ/]*)$")
 
 
+def units_line(line: str) -> list[str] | None:
+    """Each column's unit a preamble line lists in the table's separators ('Units: ms, g, g, V', as a logger writes
+    one above its header), or None: its commas made it the header, and the file was refused ('column 'g' appears
+    twice in the header')."""
+    match = _PREAMBLE_FIELD.match(line.strip())
+    separator = delimiter_of(line)
+    if match is None or separator is None or match.group(1).strip().lower() not in UNIT_KEYS:
+        return None
+    fields = [f.strip() for f in match.group(3).split(separator)]
+    if len(fields) < 2 or any(_column([f]).dtype.kind == "f" or not _UNIT_FIELD.match(f) for f in fields):
+        return None
+    return fields
+
+
 def preamble(lines: list[str]) -> tuple[int, dict[str, object]]:
     """(how many of *lines* (non-blank, no '#') are a logger's preamble above the table, the fields it states).
 
     A preamble line has none of the table's separators (',', ';', tab) where a later line has one (a title,
     'Date: ...'), or is 'key: value' / 'key = value' above a blank-separated table. A rate ('Sample rate:
     25600 Hz', 'Sampling Rate (kHz): 25.6') becomes the field 'sample_rate' in Hz, as does a sample
-    interval ('dt: 39.0625 us'); other keys (a device, a date) are no channels and are left out."""
-    delimited = next((i for i, line in enumerate(lines[:100]) if delimiter_of(line) is not None), None)
+    interval ('dt: 39.0625 us'); a line listing each column's unit ('Units: ms, g, g, V') the field 'units_row';
+    other keys (a device, a date) are no channels and are left out."""
+    listed = [units_line(line) if delimiter_of(line) is not None else None for line in lines[:100]]
+    delimited = next(
+        (i for i, line in enumerate(lines[:100]) if delimiter_of(line) is not None and listed[i] is None), None
+    )
     fields: dict[str, object] = {}
     count = 0
     for i, line in enumerate(lines[:100]):
         match = _PREAMBLE_FIELD.match(line.strip())
+        if listed[i] is not None and delimited is not None and i < delimited:
+            fields["units_row"], count = listed[i], i + 1
+            continue
         if (
             delimiter_of(line) is not None
             or (delimited is None and match is None)
@@ -251,6 +272,7 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
                 fields[field[0]] = field[1]
         line_numbers, lines = _without(line_numbers, lines, comments)
     skipped, stated = preamble(lines[:101])  # it reads 100 lines and asks for one more
+    listed = stated.pop("units_row", None)
     fields.update(stated)
     line_numbers, lines = line_numbers[skipped:], lines[skipped:]
     if not lines:
@@ -265,6 +287,8 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
     header = [h.strip() for h in rows[0]] if is_header(rows[0]) else None
     units = units_row(rows[1], header) if header is not None and len(rows) > 1 else None
     first_data = 1 + bool(units) if header is not None else 0
+    if units is None and header is not None and listed is not None:  # the preamble's units line, the row's alike
+        units = units_row(listed, header)
     data_lines, data_numbers = lines[first_data:], line_numbers[first_data:]
     width = len(rows[0])
     warnings = []
