@@ -211,6 +211,7 @@ def _csv_header(path: Path) -> Header:
     with path.open(encoding=encoding_of(path), errors="replace") as stream:
         ahead = list(itertools.islice(stream, 200))  # a logger's preamble lies within its first lines
         skipped, stated_fields = preamble([line for line in ahead if line.strip() and not line.strip().startswith("#")])
+        listed = stated_fields.pop("units_row", None)  # a preamble's 'Units: ms, g, g, V': as a units row under it
         fields += [(k, v) for k, v in stated_fields.items()]
         f = itertools.chain(ahead, stream)
         for number, line in enumerate(f, start=1):
@@ -251,6 +252,8 @@ def _csv_header(path: Path) -> Header:
             )
     rate = any(is_rate_or_time(n) for n in [*names, *(k for k, _ in fields)])  # a field's rate, no channel's
     _say_footer(path, len(names))
+    if units is None and listed is not None:  # a units row under the names stands over the preamble's line
+        units = units_row(listed, names)
     units = file_units(dict(fields), names) | (units or {})  # a '# units: g' line's, each column's of a units row
     return Header("CSV", names, rate, indexed=True, stated=stated[0], stated_within=stated[1], units=units)
 
