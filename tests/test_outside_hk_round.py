@@ -30,22 +30,24 @@ def test_a_logger_s_channel_units_line_in_its_preamble_is_no_header(tmp_path):
     assert found["Accel Y (g)"] == pytest.approx(np.sin(500 * t), abs=1e-5)
 
 
-def test_a_preamble_s_units_line_gives_each_column_its_unit_at_validate_and_in_a_run(tmp_path, cli):
+@pytest.mark.parametrize("name, sep", [("log.csv", ","), ("log.txt", "\t")])
+def test_a_preamble_s_units_line_gives_each_column_its_unit_at_validate_and_in_a_run(tmp_path, cli, name, sep):
     # columns named with no unit, the preamble's line alone says AccY is in g: validate's header reading and a run's
-    # reading must both know it (a sensitivity given for volts refused)
+    # reading must both know it (a sensitivity given for volts refused), in a CSV and a tab-separated text alike
     from gearboxes import description, stage
 
     from gearlab.data.recordings import read_contents
 
     t = np.arange(4096) / 20480.0
-    rows = "".join(f"{s:.7f},0.1,{np.sin(5000 * s):.6f},0.05\n" for s in t)
-    path = tmp_path / "log.csv"
-    path.write_text("Device: VL-4\nSample rate: 20480 Hz\nUnits: s, V, g, V\nTime,AccX,AccY,Tacho\n" + rows)
+    rows = "".join(sep.join((f"{s:.7f}", "0.1", f"{np.sin(5000 * s):.6f}", "0.05")) + "\n" for s in t)
+    path = tmp_path / name
+    table = sep.join(("Units: s", "V", "g", "V")) + "\n" + sep.join(("Time", "AccX", "AccY", "Tacho")) + "\n"
+    path.write_text("Device: VL-4\nSample rate: 20480 Hz\n" + table + rows)
     assert read_contents(path, ["AccY"])[0].units["AccY"] == "g"
     (tmp_path / "box.toml").write_text(description(stage(23, 79), speed="35 Hz", load="40 N*m"))
     scenario = (
         '[scenario]\nname = "s"\nkind = "gap"\n[source]\ngearbox = "box.toml"\n[target]\nvibration = "AccY"\n'
-        'speed = "35 Hz"\nsensitivity = "100 mV/g"\nfile = "log.csv"\n'
+        f'speed = "35 Hz"\nsensitivity = "100 mV/g"\nfile = "{name}"\n'
     )
     (tmp_path / "s.toml").write_text(scenario)
     code, out, err = cli("validate", tmp_path / "s.toml")

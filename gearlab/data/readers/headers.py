@@ -295,12 +295,13 @@ def _rate_fields(fields) -> list[tuple[str, float | None]]:
 
 
 def _text_header(path: Path, fmt: str) -> Header:
-    from .csv import file_units, header_names
+    from .csv import file_units, header_names, units_row
     from .text import comment_fields, first_row
 
     header, width = first_row(path)
     names = header_names(header, width)
     fields = {k: v for k, v in comment_fields(path).items() if k not in names}
+    listed = fields.pop("units_row", None)  # a preamble's units line: each column's, as in a CSV
     rates = _rate_fields(fields.items())
     stated = None
     if rates and rates[0][1] is not None:
@@ -308,7 +309,8 @@ def _text_header(path: Path, fmt: str) -> Header:
     if fmt == "text":  # a zipped text's tail is no cheap read
         _say_footer(path, width)
     rate = any(is_rate_or_time(n) for n in [*names, *fields])  # a comment field's rate, no channel's
-    return Header(fmt, names, rate, indexed=True, stated=stated, units=file_units(fields, names))
+    units = file_units(fields, names) | ((units_row(listed, names) or {}) if listed else {})
+    return Header(fmt, names, rate, indexed=True, stated=stated, units=units)
 
 
 def _npz_header(path: Path) -> Header:

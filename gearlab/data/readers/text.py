@@ -38,6 +38,7 @@ from .csv import (
     is_text,
     preamble,
     split_rows,
+    units_row,
 )
 
 # Bytes of text parsed at a time: large enough for numpy to parse fast, small enough that
@@ -439,6 +440,7 @@ def _read_text(path: Path, names: Sequence[str]) -> Contents:
     header, width = first_row(path)
     columns = header_names(header, width)
     fields = {k: v for k, v in comment_fields(path).items() if k not in columns}
+    listed = fields.pop("units_row", None)  # a preamble's 'Units: s<TAB>g<TAB>V': each column's, as in a CSV
     wanted = [n for n in dict.fromkeys(names) if column_index(n, columns) is not None]
     wanted += [c for c in columns if time_scale(c) is not None and c not in wanted]
     found, warnings = {}, []
@@ -450,6 +452,6 @@ def _read_text(path: Path, names: Sequence[str]) -> Contents:
         [*columns, *fields, *asked], lambda n: found[n] if n in found else fields[n], names, [*columns, *fields]
     )
     contents.available = list(columns)  # a comment's or the preamble's field (its rate read above) is no channel
-    contents.units.update(file_units(fields, columns))  # '# units: g', as a CSV's
+    contents.units.update(file_units(fields, columns) | ((units_row(listed, columns) or {}) if listed else {}))
     contents.warnings += warnings
     return contents
