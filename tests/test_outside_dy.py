@@ -289,3 +289,26 @@ def test_a_logger_s_units_line_above_the_table_is_the_unit_of_its_values(tmp_pat
     got = inspect_record(str(path), None, InspectOptions("acc", tacho="tach"))
     assert "9.80665" in got["units"], got["units"]
     assert got["rms"] == pytest.approx(np.std(acc), rel=0.02)
+
+
+def test_a_later_method_first_calling_a_take_whose_level_alone_changed_says_so():
+    # a take at 9.8 x its history's level (a file in m/s² read as g), nothing localised, was 'level changed' in its
+    # own score row; the trend said 'likelihood_ratio from take 3' as if a fault were first called there
+    from gearlab.kinds.detection_trend import first_called
+
+    level = "level changed by a factor of 9.82 (sensor, gain or load changed?): record a new history"
+    rows = [
+        {"condition": "c", "unit": "revolution", "method": m, "file": f"w{i}.csv", "median_score": 0.0, "decision": d}
+        for m, decisions in (
+            ("fm4", ("healthy", "fault", "fault")),
+            ("likelihood_ratio", ("healthy", "healthy", level)),
+        )
+        for i, d in enumerate(decisions, 1)
+    ]
+    (line,) = first_called(rows)
+    assert (
+        "first called on take 2 (w2.csv) by fm4 (likelihood_ratio from take 3 (level changed by a factor of 9.82))"
+        in line
+    ), line
+    rows[-1]["decision"] = "fault"
+    assert "(likelihood_ratio from take 3)" in first_called(rows)[0]

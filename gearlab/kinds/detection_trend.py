@@ -38,7 +38,7 @@ def first_called(rows: list[dict]) -> list[str]:
         first = min(called.values())
         by = [m for m, i in called.items() if i == first]
         take = per[by[0]][first - 1]
-        rest = [f"{m} from take {i}" for m, i in called.items() if i > first] + [
+        rest = [f"{m} from take {i}{_what(per[m][i - 1])}" for m, i in called.items() if i > first] + [
             f"{m} never" for m in per if m not in called
         ]
         said = f"{head} first called on take {first} ({Path(take['file']).name}) by {', '.join(by)}"
@@ -56,6 +56,13 @@ def first_called(rows: list[dict]) -> list[str]:
             said += f"; not called again on take {number} ({Path(lapsed['file']).name}) by {by[0]}"
         out.append(said + ("" if take.get("localised") else _localised_later(per, first)))
     return out
+
+
+def _what(row: dict) -> str:
+    """' (level changed by a factor of 9.82)' where a method's first call is no fault of the watched gear (a level
+    change, other damage, a gear not determined), else '': a take whose level alone changed x 9.8 read as
+    'likelihood_ratio from take 3', a fault first called."""
+    return "" if row["decision"] == "fault" else f" ({row['decision'].split(' (')[0].split(':')[0]})"
 
 
 # the level a take's warning says against its history's ('level 0.61 x its history's (another load or gain?) ...')
