@@ -55,7 +55,7 @@ from . import placement
 from .placement import fault_parts, shaft_names
 from .realise import CYCLE_STREAM, REFERENCE_ROW, Seeds, first_revolution, realise, record, row_seed
 from .rows import TurnedRows, entries, made
-from .slow_box import cost, first_blocks
+from .slow_box import cost, first_blocks, next_blocks
 from .spec import POINTS, Dataset, DatasetSpec, NoiseSpec
 
 if TYPE_CHECKING:
@@ -164,7 +164,7 @@ def steady_response(
                 f"model '{sim.model.name}' ({labels}, {speed:g} Hz): the response does not settle within "
                 f"{blocks * cycle} revolutions"
             )
-        blocks *= 4
+        blocks = next_blocks(blocks, period, cycle, lambda: settle_revolutions(sim, speed), most)
 
 
 def mesh_cycle(sim: Simulator) -> int:

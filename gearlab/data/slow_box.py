@@ -31,6 +31,19 @@ def first_blocks(per_rev: int, period: int, cycle: int, settle) -> int:
     return min(blocks, max(3, 2 + math.ceil(settle() / cycle)))
 
 
+def next_blocks(blocks: int, period: int, cycle: int, settle, most: int) -> int:
+    """The periods of *cycle* input turns the look after a look of *blocks* that was not steady simulates (at most
+    *most* for a later mesh's cycle): four times as many; after a later mesh's first look of 3, the fewest past the
+    start-up's *settle*() input turns plus the two compared. A short cycle's 3 end before its start-up has died away
+    (21/63 + 18/54 + 15/45: a 3-turn cycle, a 15-turn settle): it went on to 12 cycles, 36 turns, now to 7, 21 (a
+    longer look continues the shorter's integration, Simulator.tail: 21 turns integrated, not 36)."""
+    if cycle == period:
+        return 4 * blocks
+    if blocks == 3:
+        return min(most, max(4, 2 + math.ceil(settle() / cycle)))
+    return most
+
+
 def cost(fs: float, speed: float, pairs, periods, units: int | None, settle) -> str:
     """The up-front cost of a dataset's *units* simulations (None: not yet counted, gearlab validate) at *fs* (Hz)
     and *speed* (Hz), its longest unit's first look (the damage of *periods* input turns, the train's gear *pairs*;
