@@ -314,6 +314,13 @@ def _unpacked(fn: Callable, item: bytes) -> tuple[object, list[str]]:
     return _warnings_kept(lambda: fn(_Unpacker(io.BytesIO(item)).load()))
 
 
+# The forkserver is one per process, started with the first pool's first worker and kept: the modules
+# it imports are those of a warm before then (a run that trains: torch once, not 2-3 s of CPU in each
+# worker; a run that never trains loads no torch). A later run in the process (the TUI, a test session)
+# finds it as the first left it; its warm's tasks load what it lacks in each worker.
+_server = {"started": False}
+
+
 class LocalExecutor(Executor):
     """A process pool on this machine (default: one worker per core).
 
@@ -371,8 +378,12 @@ class LocalExecutor(Executor):
 
     def _start(self) -> None:
         if self._pool is None:
-            # forkserver: children start from a clean process (no inherited threads from torch or
-            # BLAS). Workers are started as units are submitted, never more than there are units.
+            # forkserver: each worker is forked from a server process that ran nothing but imports (those of
+            # the first warm, _server): no torch thread pool to inherit (torch starts it at its first op), nor
+            # half of a BLAS one (numpy's OpenBLAS starts one at import and stops it before each fork), so a
+            # worker starts as a fresh process would. Workers are started as units are submitted, never more
+            # than there are units.
+            _server["started"] = True
             context = multiprocessing.get_context("forkserver" if os.name == "posix" else "spawn")
             self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=context, initializer=_worker_started)
             weakref.finalize(self, self._pool.shutdown)  # an executor dropped without close()
@@ -381,8 +392,12 @@ class LocalExecutor(Executor):
         """One task per worker that imports *modules*, not waited for: while this process prepares
         the next map, the workers load what its units would load first (detection: torch and
         scipy.stats, 2.7 s of CPU a worker that each worker's first training waited for). A worker
-        that takes two leaves the other to its first unit. Nothing with one worker."""
+        that takes two leaves the other to its first unit. Nothing with one worker. Before the
+        process's first pool, the forkserver imports them itself, once, and each worker is forked
+        with them loaded (_server)."""
         if self.workers > 1:
+            if os.name == "posix" and not _server["started"]:
+                multiprocessing.get_context("forkserver").set_forkserver_preload(["__main__", *modules])
             self._start()
             for _ in range(self.workers):
                 self._pool.submit(_imported, tuple(modules))

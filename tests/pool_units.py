@@ -80,6 +80,16 @@ def module_loaded(marks: Path, name: str) -> bool:
     return name in sys.modules
 
 
+LOADED_IN = os.getpid()  # the process that imported this module: a worker, or the forkserver it was forked from
+
+
+def loaded_in(marks: Path, x: int) -> tuple[int, int, int]:
+    """(the process that imported this module, this worker's, its parent's: the forkserver), once both
+    workers took an item."""
+    both_workers_took_one(marks)
+    return LOADED_IN, os.getpid(), os.getppid()
+
+
 def mark_then_wait(task):
     """Unit 0 fails once another unit runs beside it; the others mark that they started (with their
     process id, whole once seen: unit 0's failure stops them at once, maybe inside the write) and run

@@ -7,8 +7,10 @@ why, when Ray is not installed.
 """
 
 import functools
+import json
 import os
 import re
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -193,6 +195,39 @@ def test_a_warmed_local_pool_has_loaded_the_modules_before_its_units_ask(tmp_pat
     with LocalExecutor(1) as one:
         one.warm(("tabnanny",))
         assert one._pool is None  # one worker: the units run in this process
+
+
+LOADED_IN = """
+import functools, json, math, tempfile
+from pathlib import Path
+from gearlab.executors import LocalExecutor
+from pool_units import loaded_in
+if {before}:  # a run before, which warmed nothing, started the process's forkserver
+    with LocalExecutor(2) as pool:
+        pool.map(math.sqrt, [1.0, 4.0])
+with LocalExecutor(2) as pool, tempfile.TemporaryDirectory() as marks:
+    pool.warm(("pool_units",))
+    print(json.dumps(pool.map(functools.partial(loaded_in, Path(marks)), range(2))))
+"""
+
+
+@pytest.mark.parametrize("before", [False, True])
+def test_a_warm_before_the_first_pool_has_the_forkserver_load_the_modules_once(before):
+    """Issue 42: each worker imported torch (2-3 s of CPU) itself; a warm before the process's first pool
+    has its forkserver import the modules, and each worker is forked with them loaded. The forkserver
+    is started once a process: a warm after a run that warmed nothing has its workers load them (in a
+    process of its own: the test session's forkserver is long started)."""
+    # the path through the environment: Python 3.11's forkserver takes no sys.path of its parent's
+    path = os.pathsep.join([str(Path(__file__).parent), *filter(None, [os.environ.get("PYTHONPATH")])])
+    script = LOADED_IN.format(before=before)
+    env = {**os.environ, "PYTHONPATH": path}
+    out = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True, check=True)
+    (loaded_0, worker_0, server_0), (loaded_1, worker_1, server_1) = json.loads(out.stdout)
+    assert worker_0 != worker_1 and server_0 == server_1  # two workers of one forkserver
+    if before:
+        assert (loaded_0, loaded_1) == (worker_0, worker_1)
+    else:
+        assert loaded_0 == loaded_1 == server_0
 
 
 def test_ray_tasks_that_want_a_gpu_get_a_share_of_one(ray_session):
