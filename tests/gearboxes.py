@@ -151,3 +151,21 @@ def box_s_detection(folder, name: str, files, target: str) -> None:
         f"healthy = 8\n[target]\n{target}files = [\n{listed},\n]\n"
         '[[methods]]\nadapter = "matched_filter"\n[protocol]\nbatch = 4\n'
     )
+
+
+def inspected(cli, take, *keys) -> dict:
+    """`gearlab inspect TAKE KEYS --json`'s report, the command having exited 0."""
+    import json
+
+    code, out, err = cli("inspect", take, *keys, "--json")
+    assert code == 0, err
+    return json.loads(out)
+
+
+def read_as_described(report: dict, speed_hz: float, orders) -> None:
+    """An inspect report that says its description matches, its speed within 0.5 % of *speed_hz* and each stage's
+    mesh order within 0.05 of *orders* (what an outside user's round checks first)."""
+    assert report["matches"] is True, report["verdict"]
+    assert abs(report["speed"]["mean_hz"] / speed_hz - 1) < 0.005, report["speed"]
+    measured = [s["measured_order"] for s in report["check"]["stages"]]
+    assert len(measured) == len(orders) and all(abs(m - o) < 0.05 for m, o in zip(measured, orders)), measured

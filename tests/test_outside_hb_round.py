@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.io
-from gearboxes import description, stage
+from gearboxes import description, inspected, read_as_described, stage
 
 FS_A, F_A, SENSITIVITY_A = 6400.0, 18.07, "10.2 mV/(m/s^2)"
 BOX_A = description(
@@ -65,15 +65,7 @@ def box_a(tmp_path_factory):
 def test_a_semicolon_csv_with_decimal_commas_reads_its_mesh_and_speed(cli, box_a):
     """Box A as the guide's step 2 inspects it: mesh order 17 found within 0.05, the tacho's speed within 0.5 %."""
     where, take = box_a
-    code, out, err = cli("inspect", take, "--gearbox", where / "box17.toml", *A_KEYS, "--json")
-    assert code == 0, err
-    import json
-
-    report = json.loads(out)
-    assert report["matches"] is True, report["verdict"]
-    assert abs(report["speed"]["mean_hz"] - F_A) < 0.005 * F_A, report["speed"]
-    (mesh,) = report["check"]["stages"]
-    assert abs(mesh["measured_order"] - 17) < 0.05, mesh
+    read_as_described(inspected(cli, take, "--gearbox", where / "box17.toml", *A_KEYS), F_A, [17])
 
 
 def test_a_wrong_pinion_count_is_called_out(cli, box_a):

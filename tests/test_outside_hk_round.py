@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from gearboxes import inspected, read_as_described
 
 G = 9.80665
 PREAMBLE_A = (
@@ -134,23 +135,12 @@ def takes(tmp_path_factory):
     return where, speeds
 
 
-def _inspect(cli, where, take, *keys):
-    import json
-
-    code, out, err = cli("inspect", where / take, *keys, "--json")
-    assert code == 0, err
-    return json.loads(out)
-
-
 def test_a_logger_csv_gives_its_speed_and_mesh_order_from_the_accelerometer_asked(cli, takes):
     where, speeds = takes
     code, out, err = cli("inspect", where / "a_hist.csv", "--gearbox", where / "boxA.toml")
     assert code == 2 and "the file has Accel X (g), Accel Y (g), Tacho (V); expected --vibration NAME" in err, err
-    report = _inspect(cli, where, "a_hist.csv", "--gearbox", where / "boxA.toml", *A_KEYS)
-    assert report["matches"] is True, report["verdict"]
-    assert abs(report["speed"]["mean_hz"] / speeds["a_hist.csv"] - 1) < 0.005, report["speed"]
-    (mesh,) = report["check"]["stages"]
-    assert abs(mesh["measured_order"] - 23) < 0.05, mesh
+    report = inspected(cli, where / "a_hist.csv", "--gearbox", where / "boxA.toml", *A_KEYS)
+    read_as_described(report, speeds["a_hist.csv"], [23])
 
 
 def test_a_wrong_tooth_count_is_called_out(cli, takes):
@@ -176,7 +166,7 @@ def test_a_take_against_its_history_names_the_damaged_gear_or_none(cli, takes, t
 def test_b_takes_at_twice_their_history_s_rate_read_both_stages_and_the_output_gear(cli, takes):
     where, speeds = takes
     box = ("--gearbox", where / "boxB.toml")
-    report = _inspect(cli, where, "b_out.h5", *box, *B_KEYS)
+    report = inspected(cli, where / "b_out.h5", *box, *B_KEYS)
     assert abs(report["speed"]["mean_hz"] / speeds["b_out.h5"] - 1) < 0.005, report["speed"]
     orders = [s["measured_order"] for s in report["check"]["stages"]]
     assert orders == pytest.approx([17, 29 / 3], abs=0.05), report["check"]["stages"]
