@@ -7,6 +7,7 @@ why, when Ray is not installed.
 """
 
 import functools
+import inspect
 import json
 import os
 import re
@@ -70,14 +71,19 @@ def ray_session():
         # (job submission and the state API, which gearlab does not use; Ray goes on without it, as when it
         # fails to start): three Python processes that ray.init has no option to leave out. The start took
         # 6.2 s of CPU, not 10.1, and 9.7 s on 2 busy cores, not 23 (medians of 2).
-        params = ray._private.parameter.RayParams
-        real_params = params.__init__
+        # These are Ray's internals (ray>=2.9 is not pinned): where a release moves them, the session
+        # starts in full, as a user's does, rather than failing the module.
+        params = getattr(getattr(ray._private, "parameter", None), "RayParams", None)
+        services = getattr(ray._private, "services", None)
+        if params is not None and {"no_monitor", "include_log_monitor"} <= set(inspect.signature(params).parameters):
+            real_params = params.__init__
 
-        def head_alone(self, *args, **options):
-            real_params(self, *args, **{**options, "no_monitor": True, "include_log_monitor": False})
+            def head_alone(self, *args, **options):
+                real_params(self, *args, **{**options, "no_monitor": True, "include_log_monitor": False})
 
-        mp.setattr(params, "__init__", head_alone)
-        mp.setattr(ray._private.services, "start_api_server", lambda *args, **options: (None, None))
+            mp.setattr(params, "__init__", head_alone)
+        if hasattr(services, "start_api_server"):
+            mp.setattr(services, "start_api_server", lambda *args, **options: (None, None))
         executors._open_session(None, 2)
     yield ray
     executors._close_session()
