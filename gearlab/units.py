@@ -2,7 +2,8 @@
 
 Parsing goes through pint; everything inside gearlab is a float in SI base units. The units
 scenarios use are read from a table of pint's own factors first: building pint's registry takes
-0.2-0.3 s, a third of `gearlab validate` (issue 42), and the table gives the same floats.
+0.2-0.3 s, a third of `gearlab validate` (issue 42), and the table gives the same floats. A unit
+written bare ('V', 'mV': a column named for its unit, 'acc_gear_V') is one of it, as pint reads it.
 """
 
 from __future__ import annotations
@@ -52,9 +53,9 @@ FACTORS = {
 }  # fmt: skip
 
 # An unsigned number as pint reads it (a signed one, whose integer zero pint keeps unsigned, and
-# Python's other literals go through pint), then the unit as written.
+# Python's other literals go through pint), or none (a bare unit: one of it), then the unit as written.
 _QUANTITY = re.compile(
-    r"\s*(?P<number>(?:0|[1-9]\d*)(?:\.\d*)?(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?)\s*(?P<unit>.*?)\s*"
+    r"\s*(?P<number>(?:0|[1-9]\d*)(?:\.\d*)?(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?)?\s*(?P<unit>.*?)\s*"
 )
 
 
@@ -63,11 +64,15 @@ def _from_table(text: str, unit: str) -> float | None:
     match = _QUANTITY.fullmatch(text)
     if match is None:
         return None
-    written = match.group("unit")
+    written, digits = match.group("unit"), match.group("number")
+    if digits is None and not written:
+        return None
     factor = FACTORS.get(unit, {}).get(written) if written else 1.0  # a bare number is SI already
     if factor is None:
         return None
-    number = float(match.group("number")) * factor
+    # a bare unit is one of it, as pint reads it: each process that read a column named 'acc_gear_V' or
+    # 'acc [mV]' (channel_units.name_unit) built the registry for it, 0.5-0.7 s of CPU with pint's import
+    number = (1.0 if digits is None else float(digits)) * factor
     return number if math.isfinite(number) else None  # pint's own words for an overflow
 
 

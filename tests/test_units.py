@@ -39,6 +39,9 @@ def test_the_table_gives_what_pint_gives(to):
                 assert fast is not None, text
                 slow = by_pint(text, to)
                 assert fast == slow and type(fast) is type(slow), (text, to, fast, slow)
+        for text in (written, f"  {written} "):  # a bare unit: one of it, as pint reads it
+            fast, slow = units._from_table(text.strip(), to), by_pint(text, to)
+            assert fast == slow == factor and type(fast) is type(slow), (text, to, fast, slow)
 
 
 @pytest.mark.parametrize(
@@ -91,3 +94,17 @@ def test_a_scenario_quantity_builds_no_registry():
         units.to_si(text, unit, "here")
     units.display(0.005, "m", "mm")
     assert units._ureg.cache_info().currsize == 0
+
+
+def test_a_channel_named_for_its_unit_builds_no_registry():
+    """A column named 'acc_gear_V' or 'acc [mV]' (channel_units.name_unit reads its unit bare): the table, as for a
+    scenario's quantities; each process that read such a file built pint's registry (0.5-0.7 s of CPU with its
+    import). A bare unit the table does not hold, or nothing, still goes to pint."""
+    from gearlab.data.channel_units import name_unit
+
+    units._ureg.cache_clear()
+    assert name_unit("acc_gear_V") == ("voltage", "V", 1.0)
+    assert name_unit("acc [mV]") == ("voltage", "mV", 0.001)
+    assert units.to_si("Hz", "Hz", "here") == 1.0
+    assert units._ureg.cache_info().currsize == 0
+    assert units._from_table("", "V") is None and units._from_table("ft", "m") is None
