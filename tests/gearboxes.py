@@ -169,3 +169,11 @@ def read_as_described(report: dict, speed_hz: float, orders) -> None:
     assert abs(report["speed"]["mean_hz"] / speed_hz - 1) < 0.005, report["speed"]
     measured = [s["measured_order"] for s in report["check"]["stages"]]
     assert len(measured) == len(orders) and all(abs(m - o) < 0.05 for m, o in zip(measured, orders)), measured
+
+
+def text_rows(fmt: str, *columns) -> str:
+    """The rows of *columns* as text, each *fmt* (e.g. "%.6f,%.6f,%.1f") and a newline: the bytes of a "\\n".join of
+    f-strings of the same formats and a last newline, formatted in one operation (a 60,000-row take of three
+    columns: 0.15 -> 0.05 s of CPU)."""
+    table = np.column_stack(columns)
+    return ((fmt + "\n") * len(table)) % tuple(table.ravel().tolist())

@@ -5,12 +5,14 @@ between pinion and wheel writes it as a third gear of the stage."""
 
 from __future__ import annotations
 
+import functools
 import json
 import shutil
 
 import numpy as np
 import pytest
 from detection_scenario import call_every_row, scenario, shared_run
+from gearboxes import text_rows
 from textrecords import signals, text, write_zip
 
 BOX = (
@@ -135,6 +137,13 @@ def test_a_run_s_verdict_doubts_a_call_on_a_clipped_take():
 def _sweep(path, seed: int, seconds: float = 3.0, f0: float = 30.0, sweep: float = 0.15) -> None:
     """A 39/61 take whose input speed sweeps linearly by *sweep* of *f0* over it, in volts at 100 mV/g (columns
     time_s, acc_gear_V, tacho_V): the mesh's harmonics modulated in amplitude and phase, both shafts' lines, noise."""
+    path.write_text(_sweep_text(seed, seconds, f0, sweep))
+
+
+@functools.cache
+def _sweep_text(seed: int, seconds: float, f0: float, sweep: float) -> str:
+    """_sweep's file, made once a process: the tests here and test_validate_screen write the same steady takes
+    (seeds 1-3 and 7) into several folders."""
     rng = np.random.default_rng(seed)
     fs = 20000.0
     t = np.arange(int(seconds * fs)) / fs
@@ -145,8 +154,7 @@ def _sweep(path, seed: int, seconds: float = 3.0, f0: float = 30.0, sweep: float
         x = x + a * (1 + 0.2 * np.cos(th + 0.3) + 0.1 * np.cos(out + 1.0)) * np.cos(h * 39 * th + 0.1 * np.sin(th) + h)
     volts = 0.03 * (x + rng.normal(0, 0.15, t.size))
     tacho = np.where(np.mod(th, 2 * np.pi) < 0.3, 5.0, 0.0)
-    rows = "\n".join(f"{a:.6f},{b:.6f},{c:.1f}" for a, b, c in zip(t, volts, tacho))
-    path.write_text("time_s,acc_gear_V,tacho_V\n" + rows + "\n")
+    return "time_s,acc_gear_V,tacho_V\n" + text_rows("%.6f,%.6f,%.1f", t, volts, tacho)
 
 
 def _sweep_scenario(path) -> None:
