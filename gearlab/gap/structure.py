@@ -25,6 +25,7 @@ from fractions import Fraction
 
 import numpy as np
 
+from ..gearbox.described_comb import SIDEBANDS, on_comb
 from ..gearbox.match import MIN_TEETH, OFF_COMB, ON_MESH, STRONGEST, tacho_elsewhere, tacho_shaft_words
 from ..gearbox.speed import TEETH_AGREE
 from ..inspect_tacho import marks_words
@@ -39,7 +40,6 @@ from .structure_later import _outshone as _outshone  # where tests/test_outside_
 # mesh harmonics themselves (the rest on their sidebands): a right record's mesh harmonics hold most
 # of it (B-6-ch5, the PHM 2009 records against phm09; see mesh_check). The shares and counts are
 # gearlab.gearbox.match's (a pinion of fewer than MIN_TEETH teeth is no gear: inspect's bound too).
-SIDEBANDS = 3
 FAMILY = 3  # lines of a foreign comb (module doc: a tone is one line)
 # The source simulates another speed when a measured target's differs by more than this (one rig at
 # one setting drifts by well under 1 %; a history's takes span up to kinds.common.SPEED_GROUP).
@@ -47,13 +47,6 @@ SPEED_TOL = 0.02
 # A scale factor within this of 1 is a calibration's tolerance, left to the effects.
 LEVEL_TOL = 0.1
 IN_TARGET = "[target]"  # the table of the gap's records: their acquisition keys (a run has no inspect options)
-
-
-def _on_comb(x: np.ndarray, z: float, shaft_orders: tuple[float, ...], tol: np.ndarray) -> np.ndarray:
-    """Which orders *x* lie on a mesh harmonic h z (h >= 1) or one of its sidebands h z +- j o."""
-    offsets = np.array([0.0] + [s * j * o for o in shaft_orders for j in range(1, SIDEBANDS + 1) for s in (-1, 1)])
-    h = np.maximum(1, np.round((x[:, None] - offsets[None, :]) / z))
-    return np.any(np.abs(x[:, None] - h * z - offsets[None, :]) <= tol[:, None], axis=1)
 
 
 def _comb_distance(x: np.ndarray, z: float, offsets: list[float]) -> np.ndarray:
@@ -128,17 +121,17 @@ def mesh_check(
         return out
     if x.size < 2:  # one line is a comb of itself: nothing to tell
         return out
-    on = _on_comb(x, z1, (1.0, z1 / z2), tol)
+    on = on_comb(x, z1, (1.0, z1 / z2), tol)
     for mesh, shaft_orders in later:
-        on |= _on_comb(x, mesh, shaft_orders, tol)
+        on |= on_comb(x, mesh, shaft_orders, tol)
     out["off_comb"] = float(power[~on].sum() / power.sum())
     # the source's mesh harmonics themselves (no sideband): a pinion one tooth off puts its harmonics
     # h (z1 - 1), h <= SIDEBANDS, on the comb's sidebands, so a comb holding the lines through its
     # sidebands alone is another pinion's (a 24-tooth record against 25: 24, 48, 72 on 25 - 1, 50 - 2,
     # 75 - 3); a gear's mesh harmonics outweigh their sidebands
-    on_mesh = _on_comb(x, z1, (), tol)
+    on_mesh = on_comb(x, z1, (), tol)
     for mesh, _ in later:
-        on_mesh |= _on_comb(x, mesh, (), tol)
+        on_mesh |= on_comb(x, mesh, (), tol)
     out["on_mesh"] = float(power[on_mesh].sum() / power.sum())
     # a tacho of k marks a turn read as one scales every order by 1 / k: the strongest line, off the
     # comb, at Z1 / k with its harmonics (a 29/86 mixer's 2-pulse keyphasor read as one: 14.5, 29 on
@@ -146,7 +139,7 @@ def mesh_check(
     first = int(np.argmax(power))
     # ... or q marks read as p of them, q / p not whole (a 3-mark output tacho described with 2: every order at 2/3)
     for k in (2, 3, 4, *map(float, sorted({Fraction(q, p) for p in (2, 3, 4) for q in range(p + 1, 4 * p) if q % p}))):
-        hit = _on_comb(x, z1 / k, (), tol)
+        hit = on_comb(x, z1 / k, (), tol)
         if not on[first] and abs(x[first] - z1 / k) <= tol[first] and hit.sum() >= 2:
             out.update(measured=z1 / k, differs=True, marks=k)
             return out
@@ -156,9 +149,9 @@ def mesh_check(
     # strongest line at k Z1 and no mesh harmonic h Z1 of another h tell it; a record showing its
     # mesh's fundamental, or its input-shaft sidebands at other than k apart, is read as it is (a
     # resonance can raise the mesh's kth harmonic over the first; it leaves the +-1 sidebands)
-    bare = _on_comb(x, z1, (), tol)
+    bare = on_comb(x, z1, (), tol)
     for k in (2, 3, 4):
-        hit = _on_comb(x, k * z1, (), tol)
+        hit = on_comb(x, k * z1, (), tol)
         # a line nearer a sideband j (not a multiple of k) than to one the k-turn reading also has
         d_odd = _comb_distance(x, k * z1, [s * j for j in range(1, SIDEBANDS + 1) if j % k for s in (-1, 1)])
         d_even = _comb_distance(
@@ -167,9 +160,9 @@ def mesh_check(
         odd = (d_odd <= tol) & (d_odd < d_even)
         # ... nor a line on the source's comb off the k-turn reading's (16/48 read right, its mesh at 48
         # and 96 alone: its wheel's sidebands 1/3 apart; the input's 1 apart are the k-turn wheel's)
-        read_k = _on_comb(x, k * z1, (k, k * z1 / z2), tol)
+        read_k = on_comb(x, k * z1, (k, k * z1 / z2), tol)
         for mesh, shaft_orders in later:
-            read_k |= _on_comb(x, k * mesh, tuple(k * o for o in shaft_orders), tol)
+            read_k |= on_comb(x, k * mesh, tuple(k * o for o in shaft_orders), tol)
         odd |= on & ~read_k
         if abs(x[first] - k * z1) <= tol[first] and hit.sum() >= 2 and not (bare & ~hit).any() and not odd.any():
             out.update(measured=k * z1, differs=True, marks=1 / k)
@@ -192,7 +185,7 @@ def mesh_check(
             rest = np.zeros(x.size, bool)
             for other in pools:
                 rest |= other
-            rest &= ~_on_comb(x, found, (), tol)
+            rest &= ~on_comb(x, found, (), tol)
             second = _family(x[rest], power[rest], tol[rest], fundamental=True)
             if second is not None and not _related(second, found):
                 out["also"] = [second]
@@ -206,7 +199,7 @@ def _family(x: np.ndarray, power: np.ndarray, tol: np.ndarray, fundamental: bool
     must be one of the lines (a second mesh of a train shows its own)."""
     held = []
     for c in {float(v / h) for v in x for h in range(1, 41) if v / h >= MIN_TEETH - 0.5}:
-        hit = _on_comb(x, c, (), tol)
+        hit = on_comb(x, c, (), tol)
         if hit.sum() >= FAMILY and (not fundamental or np.any(np.abs(x - c) <= tol)):
             held.append((float(power[hit].sum() / power.sum()), c))
     if not held:

@@ -13,6 +13,7 @@ import re
 
 import numpy as np
 
+from .described_comb import described_holds
 from .description import Gearbox
 from .modulated import centre
 from .orders import order_table
@@ -365,6 +366,12 @@ def check_description(
             # ... with two lines of its own at least, off M's harmonics (one line at M / 2 is a tone)
             own = [x for x in family[2] if abs(x / look - round(x / look)) * look > tol_mesh(x, bin_)]
             divisor = round(ratio) in (2, 3) and abs(ratio - round(ratio)) * family[0] <= tol_mesh(look, bin_)
+            # ... unless the described comb holds the lines nothing else explains (gearbox.described_comb)
+            if i is None and abs(family[0] - look) > tol_mesh(look, bin_):
+                o_w = measured_shaft.get(k + 1, (float(s.wheel_shaft_order),))[0]
+                shown = [*beyond, *other_stages(table, k, moved, measured_shaft, leads, ahead)]
+                if described_holds(lines, look, family[0], (o_p, o_w), shown, bin_):
+                    i, measured = harmonic_comb(lines, [look], bin_, theirs) or (None, look)
             if i is None or (divisor and len(own) >= 2):
                 measured, i = family[:2]
         # a wheel upstream a tooth or three off moves M by no whole order of the pinion's shaft (outshone.counts)
