@@ -269,7 +269,7 @@ def test_output_shaft_orders_from_consecutive_revolutions():
     assert "share" not in out  # one row per block: outside the per-revolution shares
     # Without consecutive rows the same modulation leaks into the integer orders, and the report says so.
     plain = gap_report(record(0.0, 1), record(0.05, 2), (Z1, Z2), **FAST)
-    assert "output_shaft" not in plain and any("output-shaft orders" in note for note in plain["notes"])
+    assert "output_shaft" not in plain and any("orders of the output shaft" in note for note in plain["notes"])
     assert plain["significant"]
     json.dumps(report, allow_nan=False)
 

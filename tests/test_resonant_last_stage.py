@@ -86,3 +86,22 @@ def test_a_last_pinion_a_tooth_off_still_differs(takes):
     line = gap_line(takes, (15, 45), (16, 48))
     assert line is not None and "stage 3" in line, line
 
+
+def test_the_gap_s_note_on_too_few_blocks_names_the_shaft_it_resolves():
+    # the gap report's 'output-shaft' view resolves stage 1's wheel shaft (blocks of Z2 / gcd input turns); on a
+    # three-stage train that is the intermediate 1 shaft, and its note said 'output-shaft orders need 10 blocks of 3
+    # consecutive revolutions', naming no shaft the report does
+    from gearlab.gap.stats import gap_report
+
+    rows = np.random.default_rng(3).normal(size=(2, 12, 64))
+    train = described_pair((21, 63), (18, 54), (15, 45))
+    notes = gap_report(rows[0], rows[1], train, bootstrap=0, permutations=19, consecutive=True)["notes"]
+    said = [n for n in notes if "consecutive revolutions" in n]
+    need = "orders of the intermediate 1 shaft (stage 1's 63-tooth wheel, 0.3333 input orders) need 10 blocks of 3"
+    assert len(said) == 1 and said[0].startswith(need), notes
+    # ... and the view, once the blocks suffice, carries the same words for the report's line on it
+    rows = np.random.default_rng(3).normal(size=(2, 30, 128))
+    view = gap_report(rows[0], rows[1], train, bootstrap=0, permutations=19, consecutive=True)["output_shaft"]
+    assert view["blocks"] == [10, 10] and view["shaft"] == need.split(" need")[0].removeprefix("orders of the "), view
+    notes = gap_report(rows[0], rows[1], described_pair((21, 63)), bootstrap=0, permutations=19)["notes"]
+    assert any(n.startswith("orders of the output shaft (stage 1's 63-tooth wheel") for n in notes), notes

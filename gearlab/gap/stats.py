@@ -68,6 +68,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..errors import GearlabInputError
+from .structure_later import wheel_shaft
 from .views import (
     BandPlan,
     View,
@@ -454,12 +455,12 @@ def gap_report(
     if permutations < math.ceil(1.0 / alpha) - 1:
         notes.append(f"{permutations} permutations cannot give p < {alpha}; use at least {math.ceil(1 / alpha) - 1}")
 
-    ratio = f"{z1}/{z2} = {z1 / z2:.4g}"
+    shaft = wheel_shaft(pair)
     if consecutive:
-        report["output_shaft"] = _output_shaft(Xs, Xt, (z1, z2), plan, bootstrap, seed, confidence, top, notes)
+        report["output_shaft"] = _output_shaft(Xs, Xt, (z1, z2), plan, bootstrap, seed, confidence, top, notes, shaft)
     else:
         notes.append(
-            f"output-shaft orders (multiples of {ratio}) are not resolved: each row is one input "
+            f"orders of the {shaft} are not resolved: each row is one input "
             "revolution, so their lines leak into the neighbouring integer orders (shaft and "
             "non-synchronous bands)"
         )
@@ -477,13 +478,14 @@ def gap_report(
     return report
 
 
-def _output_shaft(Xs, Xt, pair, plan, bootstrap, seed, confidence, top, notes) -> dict | None:
+def _output_shaft(Xs, Xt, pair, plan, bootstrap, seed, confidence, top, notes, shaft: str) -> dict | None:
+    """The output-shaft view's entry (*shaft*: wheel_shaft's words), or None with a note where too few blocks."""
     z1, z2 = pair
     per_block = z2 // math.gcd(z1, z2)
     blocks = min(len(Xs), len(Xt)) // per_block
     if blocks < MIN_REVOLUTIONS:
         notes.append(
-            f"output-shaft orders need {MIN_REVOLUTIONS} blocks of {per_block} consecutive revolutions "
+            f"orders of the {shaft} need {MIN_REVOLUTIONS} blocks of {per_block} consecutive revolutions "
             f"per set ({MIN_REVOLUTIONS * per_block} revolutions); got {blocks} blocks"
         )
         return None
@@ -492,5 +494,5 @@ def _output_shaft(Xs, Xt, pair, plan, bootstrap, seed, confidence, top, notes) -
     entry = out["views"]["output_shaft"]
     entry.pop("share"), entry.pop("share_interval")  # its rows are blocks: it stays out of the shares
     entry["blocks"] = [len(vs.features), len(vt.features)]
-    entry["revolutions_per_block"] = per_block
+    entry["revolutions_per_block"], entry["shaft"] = per_block, shaft
     return entry

@@ -47,6 +47,17 @@ class _PairDescription:
         return cls(tuple(stages), SHAFT_NAMES[len(stages)])
 
 
+def wheel_shaft(pair) -> str:
+    """The shaft of *pair*'s stage-1 wheel as the structure lines name a train's shafts (_PairDescription.train), its
+    wheel and its order: what the gap report's output-shaft view resolves, the output shaft of one stage alone, not of
+    a longer train ('intermediate 1 shaft (stage 1's 63-tooth wheel, 0.3333 input orders)' on a three-stage one)."""
+    from .views import gear_ratio
+
+    z1, z2 = gear_ratio(pair)
+    name = _PairDescription.train(pair).shafts[1] if hasattr(pair, "Z1") else "output"
+    return f"{name} shaft (stage 1's {z2}-tooth wheel, {z1 / z2:.4g} input orders)"
+
+
 class Spectra:
     """The spectra, lines and inspect's readings of the revolutions one structure check reads
     (structure.structure_line): it reads one history several ways (mesh_check, inspect's stages, a tacho's misread,

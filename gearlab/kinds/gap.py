@@ -682,8 +682,8 @@ def summary_lines(run: RunDir) -> list[str]:
     if shaft.get("before"):
         after = shaft.get("after") or {}
         lines.append(
-            f"output-shaft orders (consecutive revolutions): gap {shaft['before']['gap']:.4g} -> "
-            f"{after.get('gap', float('nan')):.4g}"
+            f"orders of the {shaft['before'].get('shaft', 'output shaft')} (consecutive revolutions): gap "
+            f"{shaft['before']['gap']:.4g} -> {after.get('gap', float('nan')):.4g}"
         )
     lines += ["per-view gap:", views_md(s["views"]).rstrip()] if s["views"] else []
     if s.get("accuracy"):
