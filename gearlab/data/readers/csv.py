@@ -95,11 +95,16 @@ def preamble(lines: list[str]) -> tuple[int, dict[str, object]]:
     return count, fields
 
 
-def file_units(fields: dict[str, object], columns: Sequence[str]) -> dict[str, str]:
+def file_units(
+    fields: dict[str, object], columns: Sequence[str], row: dict[str, str] | None = None, listed: list | None = None
+) -> dict[str, str]:
     """{column: unit} that comment or preamble lines (*fields*) state for *columns*, read as every reader reads a
-    stated unit (base.stated_units): every column's ('# units: g', 'Units: g') or one's ('# acc_unit = g'); a units
-    row under the header says each column's, and stands (the callers')."""
-    return stated_units({k: v for k, v in fields.items() if isinstance(v, str)}, columns)
+    stated unit (base.stated_units): every column's ('# units: g', 'Units: g') or one's ('# acc_unit = g'); over
+    them each column's of a units row under the header (*row*, units_row's), else of a preamble's units line
+    (*listed*: its fields, read as such a row). The one merge of a CSV's and a text's, header and run alike."""
+    if row is None and listed is not None:
+        row = units_row(listed, columns)
+    return stated_units({k: v for k, v in fields.items() if isinstance(v, str)}, columns) | (row or {})
 
 
 def _rate_of(match: re.Match) -> float | None:
@@ -287,8 +292,7 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
     header = [h.strip() for h in rows[0]] if is_header(rows[0]) else None
     units = units_row(rows[1], header) if header is not None and len(rows) > 1 else None
     first_data = 1 + bool(units) if header is not None else 0
-    if units is None and header is not None and listed is not None:  # the preamble's units line, the row's alike
-        units = units_row(listed, header)
+    listed = listed if header is not None else None  # the preamble's units line, read as the row under the names
     data_lines, data_numbers = lines[first_data:], line_numbers[first_data:]
     width = len(rows[0])
     warnings = []
@@ -308,7 +312,7 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
         columns = header_names(header, width)
         if header is not None and len(set(header)) != len(header):
             _twice(path, header)
-        return _contents(columns, fields, names, lambda j: numbers[j], units, warnings)
+        return _contents(columns, fields, names, lambda j: numbers[j], (units, listed), warnings)
     if plain:
         rows = split_rows(lines, delimiter)
     data = rows[first_data : first_data + len(data_lines)]
@@ -331,7 +335,7 @@ def _read_csv(path: Path, names: Sequence[str]) -> Contents:
             "row of column names, then rows of numbers"
         )
     column = lambda j: _column([row[j] for row in data])  # noqa: E731
-    return _contents(header_names(header, width), fields, names, column, units, warnings)
+    return _contents(header_names(header, width), fields, names, column, (units, listed), warnings)
 
 
 # why a row has more or fewer fields than the header: a comma-separated row of decimal commas ('0,25,1,5') splits each
@@ -360,8 +364,9 @@ def _twice(path: Path, header: list[str]) -> None:
 
 
 def _contents(columns: list[str], fields: dict[str, object], names: Sequence[str], column, units, warnings) -> Contents:
-    """The file's channels: *column(j)* gives the j-th column's values; a comment's field by its name; *warnings*:
-    what the reader left out (footer_note)."""
+    """The file's channels: *column(j)* gives the j-th column's values; a comment's field by its name; *units*: (the
+    units row's, the preamble's units line) as file_units reads them; *warnings*: what the reader left out
+    (footer_note)."""
 
     def get(name: str):
         j = column_index(name, columns)
@@ -373,6 +378,6 @@ def _contents(columns: list[str], fields: dict[str, object], names: Sequence[str
     asked = [n for n in names if n not in columns and n not in fields and column_index(n, columns) is not None]
     contents = _keyed([*columns, *fields, *asked], get, names, listed=[*columns, *fields])
     contents.available = list(columns)  # a comment's or the preamble's field (its rate read above) is no channel
-    contents.units.update(file_units(fields, columns) | (units or {}))
+    contents.units.update(file_units(fields, columns, *units))
     contents.warnings += warnings
     return contents

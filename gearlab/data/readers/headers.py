@@ -252,9 +252,7 @@ def _csv_header(path: Path) -> Header:
             )
     rate = any(is_rate_or_time(n) for n in [*names, *(k for k, _ in fields)])  # a field's rate, no channel's
     _say_footer(path, len(names))
-    if units is None and listed is not None:  # a units row under the names stands over the preamble's line
-        units = units_row(listed, names)
-    units = file_units(dict(fields), names) | (units or {})  # a '# units: g' line's, each column's of a units row
+    units = file_units(dict(fields), names, units, listed)  # as the run's reader merges them
     return Header("CSV", names, rate, indexed=True, stated=stated[0], stated_within=stated[1], units=units)
 
 
@@ -295,10 +293,10 @@ def _rate_fields(fields) -> list[tuple[str, float | None]]:
 
 
 def _text_header(path: Path, fmt: str) -> Header:
-    from .csv import file_units, header_names, units_row
+    from .csv import file_units, header_names
     from .text import comment_fields, first_row
 
-    header, width = first_row(path)
+    header, width, row = first_row(path)
     names = header_names(header, width)
     fields = {k: v for k, v in comment_fields(path).items() if k not in names}
     listed = fields.pop("units_row", None)  # a preamble's units line: each column's, as in a CSV
@@ -309,7 +307,7 @@ def _text_header(path: Path, fmt: str) -> Header:
     if fmt == "text":  # a zipped text's tail is no cheap read
         _say_footer(path, width)
     rate = any(is_rate_or_time(n) for n in [*names, *fields])  # a comment field's rate, no channel's
-    units = file_units(fields, names) | ((units_row(listed, names) or {}) if listed else {})
+    units = file_units(fields, names, row, listed)  # as the run's reader merges them
     return Header(fmt, names, rate, indexed=True, stated=stated, units=units)
 
 

@@ -298,6 +298,7 @@ def read_columns(path, columns, warnings: list[str] | None = None) -> tuple[dict
     width = 0
     picked: list[int] = []
     delimiter: str | None = None
+    under_header = False  # the next data line follows the header: a row of units there is none of the data
     skip = _preamble(path)[0]  # a logger's lines above the table
     limit = max_record_bytes()
     text_bytes, kept_bytes = 0, 0  # of text read and of columns kept, against the limit
@@ -329,7 +330,7 @@ def read_columns(path, columns, warnings: list[str] | None = None) -> tuple[dict
             if not width:
                 delimiter = _delimiter(block, skip)
             passed = 0  # the block's lines above its rows (a preamble's, the header)
-            if b"#" in block or block.count(b"\r") != block.count(b"\r\n") or not width:
+            if b"#" in block or block.count(b"\r") != block.count(b"\r\n") or not width or under_header:
                 kept = []
                 for line in block.split(b"\n"):
                     tokens = _blanks(line, delimiter).split()
@@ -341,9 +342,14 @@ def read_columns(path, columns, warnings: list[str] | None = None) -> tuple[dict
                     if not width:  # the first data line: a header, or the first row
                         if not all(_is_number(t) for t in tokens):
                             header = _fields(line, delimiter)
-                            width, passed = len(header), passed + 1
+                            width, passed, under_header = len(header), passed + 1, True
                             continue
                         width = len(tokens)
+                    elif under_header:
+                        under_header = False
+                        if not all(map(_is_number, tokens)) and units_row(_fields(line, delimiter), header):
+                            passed += 1  # as first_row reads it (its units)
+                            continue
                     kept.append(_blanks(line, delimiter))
                 body = b"\n".join(kept)
                 if width and not picked:
@@ -386,11 +392,11 @@ def read_columns(path, columns, warnings: list[str] | None = None) -> tuple[dict
     return {c: table[:, i] for i, c in enumerate(columns)}, header, width
 
 
-def first_row(path) -> tuple[list[str] | None, int]:
-    """(header names or None, number of columns) from the first data line of a text record,
-    without reading the rest."""
+def first_row(path) -> tuple[list[str] | None, int, dict[str, str] | None]:
+    """(header names or None, number of columns, each column's unit a row of units under the header states or
+    None) from the first data lines of a text record, without reading the rest."""
     path = Path(path)
-    header = None
+    header, units = None, None
     skip = _preamble(path)[0]  # a logger's lines above the table
     with _open_text(path) as (stream, where):
         delimiter = None
@@ -404,7 +410,9 @@ def first_row(path) -> tuple[list[str] | None, int]:
             if not tokens or tokens[0].startswith(b"#"):
                 continue
             if all(_is_number(t) for t in tokens):
-                return header, len(tokens) if header is None else len(header)
+                return header, len(tokens) if header is None else len(header), units
+            if header is not None and units is None and (units := units_row(_fields(line, delimiter), header)):
+                continue  # a logger's row of units under the names ('s', 'V', 'm/s²'), as a CSV's
             if header is not None:  # not a record (a system file?): nothing of it is quoted
                 raise GearlabInputError(
                     f"{where}: its first data row (line {number}) holds no number; expected a header row "
@@ -437,7 +445,7 @@ def comment_fields(path) -> dict[str, object]:
 
 def _read_text(path: Path, names: Sequence[str]) -> Contents:
     """The asked-for columns (by header name or 0-based index), any time column and '# key = value' lines."""
-    header, width = first_row(path)
+    header, width, row = first_row(path)
     columns = header_names(header, width)
     fields = {k: v for k, v in comment_fields(path).items() if k not in columns}
     listed = fields.pop("units_row", None)  # a preamble's 'Units: s<TAB>g<TAB>V': each column's, as in a CSV
@@ -452,6 +460,6 @@ def _read_text(path: Path, names: Sequence[str]) -> Contents:
         [*columns, *fields, *asked], lambda n: found[n] if n in found else fields[n], names, [*columns, *fields]
     )
     contents.available = list(columns)  # a comment's or the preamble's field (its rate read above) is no channel
-    contents.units.update(file_units(fields, columns) | ((units_row(listed, columns) or {}) if listed else {}))
+    contents.units.update(file_units(fields, columns, row, listed))
     contents.warnings += warnings
     return contents
