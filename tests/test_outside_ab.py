@@ -93,7 +93,7 @@ def test_a_run_up_test_take_is_cut_to_its_revolutions_at_the_history_speed_as_sc
     assert words.startswith(f"scored on {len(cut[f])} of {len(rec.revolutions)} revolutions at ")
     assert cond["speed_from"][f.path].endswith(words) and D.VARIES_WORDS in cond["speed_from"][f.path]
     assert cond["speeds"][f.path] == pytest.approx(16.0, rel=D.IN_BAND)
-    assert f"{f.path}: 14.08 Hz .. 18.92 Hz {D.VARIES_WORDS}; {words}" in cond["warnings"], cond["warnings"]
+    assert f"{f.path}: 14.08 Hz .. 18.92 Hz {D.VARIES_WORDS} a run-up; {words}" in cond["warnings"], cond["warnings"]
     assert cond["raw"][f.path][0].shape == part.revolutions.shape  # the which-gear check reads the same part
 
 

@@ -62,7 +62,7 @@ def test_a_history_take_that_runs_up_first_is_used_on_its_steady_part(tmp_path):
     how = cond["speed_from"][f.path]
     assert D.VARIES_WORDS in how and how.split("; ")[-1].startswith(words) and how.endswith(" Hz (steady part)"), how
     (warning,) = [w for w in cond["warnings"] if w.startswith(f.path)]
-    assert f"{D.VARIES_WORDS}; {words}" in warning and warning.endswith("(steady part)"), warning
+    assert f"{D.VARIES_WORDS} a run-up; {words}" in warning and warning.endswith("(steady part)"), warning
     # its units from the steady revolutions only: the run-up's rings (4 x the tone) are not among them
     h1 = dict(cond["history"])[[g for g, _ in cond["history"] if g.path.endswith("h1.zip")][0]]
     assert np.abs(revs).max() < 2 * np.abs(h1).max(), (np.abs(revs).max(), np.abs(h1).max())

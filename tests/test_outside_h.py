@@ -88,7 +88,7 @@ def test_a_run_up_is_said_a_run_up_not_only_its_mean_speed(tmp_path):
     keys = {"vibration": "Beschl. 1 [g]", "tacho": "Tacho [V]"}
     up = cut_recording(str(_run_up_csv(tmp_path / "runup.csv", 20.0, 35.0)), **keys)
     assert up.speed_hz == pytest.approx(27.5, rel=0.01)
-    assert "20." in up.angle_source and "over the take: a run-up or coast-down?" in up.angle_source, up.angle_source
+    assert "20." in up.angle_source and "over the take: a run-up:" in up.angle_source, up.angle_source
     steady = cut_recording(str(_run_up_csv(tmp_path / "steady.csv", 20.0, 20.4)), **keys)  # a motor's 2 %: steady
     assert "run-up" not in steady.angle_source, steady.angle_source
 

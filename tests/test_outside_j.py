@@ -193,7 +193,7 @@ def test_a_run_up_without_a_history_is_said_a_run_up_in_the_error(cli, tmp_path,
     code, _, err = cli("run", tmp_path / "det.toml", "--quick", "--out", tmp_path / "runs")
     last = err.strip().splitlines()[-1]
     assert code == 2 and "has no history record" in last, err[-2000:]
-    assert "up.csv (20" in last and "over the take: a run-up or coast-down?" in last, last
+    assert "up.csv (20" in last and "over the take: a run-up)" in last, last
 
 
 def test_at_80_columns_a_wide_table_of_the_results_is_a_block_per_row(detection_run):
@@ -287,7 +287,7 @@ def test_a_run_up_grouped_by_hand_is_cut_to_its_condition_s_speed_or_refused_in_
     with pytest.raises(GearlabInputError) as got:
         read_target(spec.target, spec.detection.blocks, lambda e: None, shaft=unit_shaft(spec.source))
     said = str(got.value)
-    assert " Hz .. 34.7" in said and "over the take: a run-up or coast-down?" in said and "('20 Hz')" in said, said
+    assert " Hz .. 34.7" in said and "over the take: a run-up" in said and "('20 Hz')" in said, said
     assert len(said.splitlines()) == 1 and "h1.csv" not in said and "h2.csv" not in said, said
 
 

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..errors import GearlabInputError
 from ..signals import spectrum, upsampled
-from ..signals.checks import SPEED_VARIES, UNSEEN_WORDS, fmt_hz, speed_varies, stopped
+from ..signals.checks import SPEED_VARIES, UNSEEN_WORDS, fmt_hz, speed_shape, speed_varies, stopped
 from ..signals.pipeline import Upsampled
 from .description import Gearbox
 from .orders import order_table
@@ -440,9 +440,9 @@ def nominal_line(measured: float, nominal: float, said: str, per_revolution=()) 
     """The measured speed against a description's (or a --speed's) nominal one, *said* where it was
     given: information, never a mismatch (a tooth count, a tacho's shaft or its marks are what differ).
     *per_revolution* (Hz, each revolution's): a take whose speed, each the mean over 5 turns (as
-    signals.checks.speed_varies reads a run's), spans over SPEED_VARIES of its mean is a run-up or coast-down,
-    whose mean is no operating point (a take starting with 1 s of run-up, then steady at the nominal 23.7 Hz,
-    read 1.6 % slow: 'slip under load'); one revolution's jitter (a speed followed on a mesh line) is none."""
+    signals.checks.speed_varies reads a run's), spans over SPEED_VARIES of its mean is a run-up, coast-down or drift
+    (speed_shape), whose mean is no operating point (a take starting with 1 s of run-up, then steady at the nominal
+    23.7 Hz, read 1.6 % slow: 'slip under load'); one revolution's jitter (a speed followed on a mesh line) is none."""
     d = measured / nominal - 1.0
     s = np.asarray(per_revolution, dtype=float)
     s = np.convolve(s, np.full(5, 0.2), "valid") if s.size >= 5 else np.full(1, measured)
@@ -450,7 +450,7 @@ def nominal_line(measured: float, nominal: float, said: str, per_revolution=()) 
     if high - low > SPEED_VARIES * measured:
         stop = stopped(1.0 / np.asarray(per_revolution, dtype=float))  # the turns' seconds, from the first mark
         span = f"{fmt_hz(low)} .. {fmt_hz(high)}{stop and '; ' + stop}"
-        how = f"the mean of a run-up or coast-down ({span}), not a steady speed"
+        how = f"the mean of {speed_shape(s, bool(stop))} ({span}), not a steady speed"
     elif abs(d) <= 0.002:
         how = "as described"
     elif -NOMINAL_RANGE <= d < 0:

@@ -1,4 +1,4 @@
-"""A run-up or coast-down in the detection kind (gearlab.kinds.detection): a test take whose speed varies is
+"""A run-up, coast-down or drift in the detection kind (gearlab.kinds.detection): a test take whose speed varies is
 scored on its longest stretch of revolutions at a condition's history speed, by the run itself
 (detection_records.read_target) and by `gearlab score` (detection_scoring) alike: one rule, one set of words; a
 history take that runs up first is used on its longest steady stretch (the same band about that stretch's own speed).
@@ -13,7 +13,7 @@ import numpy as np
 
 from ..data.chain import Chain
 from ..errors import GearlabInputError
-from ..signals.checks import SPEED_VARIES, VARIES_WORDS, fmt_hz, reversal_words
+from ..signals.checks import SPEED_VARIES, VARIES_WORDS, fmt_hz, reversal_words, varies_span
 
 # A take whose speed varies beyond a steady take's (speed_varies: a run-up or coast-down) is scored on its
 # revolutions within this share of its condition's history speed (the median of the history records' speeds: no
@@ -35,9 +35,9 @@ def stretch(speeds: np.ndarray, centre: float) -> slice:
 
 
 def span(how: str) -> str:
-    """A varying take's speeds in words from its speed source *how* ('20.16 Hz .. 34.94 Hz over the take: a run-up or
-    coast-down?'), without what a run once did with it (grouped at its mean speed)."""
-    return how.split("; ")[-1].split(VARIES_WORDS)[0] + VARIES_WORDS
+    """A varying take's speeds in words from its speed source *how* ('20.16 Hz .. 34.94 Hz over the take: a run-up'),
+    without what a run once did with it (grouped at its mean speed): signals.checks.varies_span."""
+    return varies_span(how)
 
 
 @dataclass(frozen=True)

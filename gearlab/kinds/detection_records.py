@@ -42,7 +42,7 @@ MIN_HISTORY_UNITS = 8
 
 def varies(how: str) -> str:
     """Of a record's speed source *how* (cut_recording's angle_source), its run-up words: ' (20.26 Hz .. 34.86 Hz
-    over the take: a run-up or coast-down? ...)', else ""."""
+    over the take: a run-up: ...)', else ""."""
     return f" ({how.split('; ')[-1]})" if VARIES_WORDS in how or UNSEEN_WORDS in how else ""
 
 

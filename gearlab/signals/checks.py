@@ -107,7 +107,35 @@ def fmt_hz(f: float) -> str:
 # A record whose speed spans more than this share of its mean (its revolutions' speeds, each over a few turns) is no
 # steady record: a run-up or a coast-down, which gearlab order-tracks but groups and scores at its mean speed alone
 SPEED_VARIES = 0.05
-VARIES_WORDS = "over the take: a run-up or coast-down?"
+VARIES_WORDS = "over the take:"  # before speed_shape's words: what marks a take whose speed varies
+# after them, what a run once did with such a take (varies_span leaves it out)
+_MEAN_WORDS = ": its mean speed is its condition (steady records compare)"
+
+# A speed track whose net change (between the means of its first and last of SHAPE_STRETCHES stretches) is at least
+# MONOTONE of the way it travels (the stretches' changes summed) is a run-up or coast-down; one that wanders and
+# returns, a drift (a motor's slow ±3 % was said 'a run-up or coast-down?'). A linear ramp reads ~1, a take that
+# runs up first and then holds ~1, a drift of 1.5 slow cycles 0.0-0.4 (0.33 where it starts at a peak).
+SHAPE_STRETCHES = 12
+MONOTONE = 2 / 3
+
+
+def speed_shape(speeds, stops: bool = False) -> str:
+    """What a take's *speeds* (Hz, each revolution's or each few's, in turn order) whose span is no steady take's
+    do: 'a run-up', 'a coast-down' (a monotone change of speed over the take), or 'a drift of ±3.0 %' (half their
+    span over their mean: the speed wanders and returns); where the shaft *stops* a while (stopped), that wander is
+    'a stop and a restart'."""
+    s = np.asarray(speeds, dtype=float)
+    means = np.array([part.mean() for part in np.array_split(s, max(2, min(SHAPE_STRETCHES, s.size // 5)))])
+    net, way = float(means[-1] - means[0]), float(np.sum(np.abs(np.diff(means))))
+    if way > 0 and abs(net) >= MONOTONE * way:
+        return "a run-up" if net > 0 else "a coast-down"
+    return "a stop and a restart" if stops else f"a drift of ±{50 * (s.max() - s.min()) / s.mean():.1f} %"
+
+
+def varies_span(how: str) -> str:
+    """A varying take's speeds and shape in words from its speed source *how* ('20.16 Hz .. 34.94 Hz over the take:
+    a run-up'), without what a run once did with it (its mean speed its condition)."""
+    return how.split("; ")[-1].split(_MEAN_WORDS)[0]
 
 
 # said of a record without a tacho whose spectra show its speed vary, its angle not (gearbox.speed.varies_words)
@@ -127,9 +155,10 @@ def revolution_speeds(angle: np.ndarray, fs: float) -> np.ndarray:
 
 
 def speed_varies(angle: np.ndarray, fs: float, smooth: int = 5) -> str:
-    """ "; 20.08 Hz .. 34.93 Hz over the take: ..." where the shaft *angle* (radians, one a sample at *fs*) turns at
-    speeds, each the mean over *smooth* turns, spanning more than SPEED_VARIES of their mean; else "". An outside
-    lab's run-up from 20 to 35 Hz was said only '27.499 Hz, from tacho ...', then 'condition 27.5 Hz has no history'."""
+    """ "; 20.08 Hz .. 34.93 Hz over the take: a run-up: ..." where the shaft *angle* (radians, one a sample at
+    *fs*) turns at speeds, each the mean over *smooth* turns, spanning more than SPEED_VARIES of their mean (their
+    shape: speed_shape); else "". An outside lab's run-up from 20 to 35 Hz was said only '27.499 Hz, from tacho
+    ...', then 'condition 27.5 Hz has no history'."""
     at = turn_times(angle, fs)
     if at.size < 2 * smooth + 1:
         return ""
@@ -138,10 +167,9 @@ def speed_varies(angle: np.ndarray, fs: float, smooth: int = 5) -> str:
     if high - low <= SPEED_VARIES * float(np.mean(speeds)):
         return ""
     stop = stopped(np.diff(at), at[0])
-    return (
-        f"; {fmt_hz(low)} .. {fmt_hz(high)}{f' ({stop})' if stop else ''} {VARIES_WORDS} its mean speed is its "
-        "condition (steady records compare)"
-    )
+    shape = speed_shape(speeds, bool(stop))
+    stop = f" ({stop})" if stop else ""
+    return f"; {fmt_hz(low)} .. {fmt_hz(high)}{stop} {VARIES_WORDS} {shape}{_MEAN_WORDS}"
 
 
 # A turn lasting STOPPED times the take's median turn or more: the shaft stood still in it (a tacho's marks cannot
