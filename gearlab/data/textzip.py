@@ -41,7 +41,7 @@ def parse_sensitivity(value, where: str) -> float:
         number, unit = _quantity(value, ("V*s^2/m", "m/s^2/V"), where)
     except GearlabInputError as exc:
         charge = _charge_per_acceleration(value, where)  # a charge accelerometer's data sheet: '10 pC/g'
-        said = f"{exc} (volts per acceleration, e.g. '10 mV/g'; g is standard gravity)"
+        said = f"{exc} (volts per acceleration; g is standard gravity)"  # its example given by the quantity's line
         raise GearlabInputError(charge or said) from None
     s = number if unit == "V*s^2/m" or not number > 0 else 1.0 / number
     if not s > 0:
