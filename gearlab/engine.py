@@ -146,6 +146,7 @@ def load_scenario(
         base=Path(base) if base is not None else path.parent,
     )
     scenario.spec = module.build(scenario)
+    scenario.unit_modules = tuple(module.unit_modules(scenario))
     return scenario
 
 

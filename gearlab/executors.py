@@ -339,6 +339,7 @@ class LocalExecutor(Executor):
         self._folder: str | None = None  # the Shared values' files
         self._files: dict[int, tuple[Shared, tuple]] = {}  # id -> (the value, kept alive; its file)
         self._warned: set[str] = set()  # the workers' warnings shown so far (one executor a run)
+        self._modules: tuple[str, ...] = ()  # what warm() asked each worker to load before its first unit
 
     def close(self) -> None:
         if self._pool is not None:
@@ -387,20 +388,23 @@ class LocalExecutor(Executor):
             context = multiprocessing.get_context("forkserver" if os.name == "posix" else "spawn")
             self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=context, initializer=_worker_started)
             weakref.finalize(self, self._pool.shutdown)  # an executor dropped without close()
+            if self._modules:  # queued before any unit: a worker loads them first (at once where forked with them)
+                for _ in range(self.workers):
+                    self._pool.submit(_imported, self._modules)
 
     def warm(self, modules: Sequence[str]) -> None:
-        """One task per worker that imports *modules*, not waited for: while this process prepares
-        the next map, the workers load what its units would load first (detection: torch and
-        scipy.stats, 2.7 s of CPU a worker that each worker's first training waited for). A worker
-        that takes two leaves the other to its first unit. Nothing with one worker. Before the
-        process's first pool, the forkserver imports them itself, once, and each worker is forked
-        with them loaded (_server)."""
+        """Each worker loads *modules* before its first unit (a run's start: gearlab.kinds.common.executor_for;
+        detection: torch and scipy.stats, 2.7 s of CPU a worker). Before the process's first pool the
+        forkserver imports them itself, once, and each worker is forked with them loaded (_server); after it,
+        one task per worker imports them, queued ahead of the units (at once where the pool runs). Starts no
+        pool: a run that maps nothing on it (a gap run of one candidate) loads nothing. Nothing with one worker."""
         if self.workers > 1:
             if os.name == "posix" and not _server["started"]:
                 multiprocessing.get_context("forkserver").set_forkserver_preload(["__main__", *modules])
-            self._start()
-            for _ in range(self.workers):
-                self._pool.submit(_imported, tuple(modules))
+            self._modules = tuple(modules)
+            if self._pool is not None:
+                for _ in range(self.workers):
+                    self._pool.submit(_imported, self._modules)
 
     def map(self, fn: Callable, items: Sequence, on_done: OnDone | None = None, gpu: bool | float = False) -> list:
         """`gpu` is accepted for the executors' common interface and ignored: a local unit

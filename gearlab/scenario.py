@@ -161,6 +161,9 @@ class Scenario:
     # the folder relative file paths resolve against: the scenario file's, also when a run
     # directory's copy of it is loaded (RunDir.scenario, --resume)
     base: Path | None = None
+    # what its kind's units load first (ScenarioKind.unit_modules, set with the spec): its run's workers load it
+    # before their first unit (gearlab.kinds.common.executor_for)
+    unit_modules: tuple[str, ...] = ()
 
     def where(self, table: str, key: str | None = None, index: int | None = None) -> str:
         return location(self.path, table, key, index)

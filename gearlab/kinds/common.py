@@ -670,11 +670,15 @@ def planned_counts(spec: DatasetSpec | MeasuredSpec, where: str = "") -> Counts 
 
 def executor_for(scenario: Scenario, address: str | None = None):
     """The scenario's [execution] executor. For Ray, `address` (the CLI's --ray-address) wins over
-    RAY_ADDRESS, which wins over the scenario's `address`."""
+    RAY_ADDRESS, which wins over the scenario's `address`. Called at a run's start: the workers load what
+    the kind's units load first (Scenario.unit_modules) before the first map, whichever step maps first (a
+    multi-file detection target is read on the pool)."""
     ex = scenario.tables["execution"]
-    return make_executor(
+    executor = make_executor(
         ex["executor"], ex["workers"] or None, address=address, scenario_address=ex.get("address") or None
     )
+    executor.warm(scenario.unit_modules)
+    return executor
 
 
 def device_of(scenario: Scenario) -> str:
@@ -694,6 +698,16 @@ def device_of(scenario: Scenario) -> str:
 
 
 # The kind contract's defaults for a kind whose summary lines say it all (gearlab.kinds.contract).
+def no_unit_modules(scenario: Scenario) -> tuple[str, ...]:
+    return ()
+
+
+# What the kinds' units load first (ScenarioKind.unit_modules): a dataset's simulation, a gap fit, a training
+BUILDS = ("gearlab.data.builder",)
+FITS = (*BUILDS, "gearlab.gap.search", "scipy.optimize", "scipy.stats")
+TRAINS = ("torch", "gearlab.parts.training")
+
+
 def no_verdict(summary: dict, records: list[dict]) -> list[str]:
     return []
 

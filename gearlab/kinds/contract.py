@@ -43,6 +43,11 @@ class ScenarioKind(Protocol):
         """Shrink scenario.spec for a smoke run, in place or by a smaller spec in its place
         (--quick; a resume shrinks alike)."""
 
+    def unit_modules(self, scenario: Scenario) -> tuple[str, ...]:
+        """The modules the run's units load first (torch, for a training): a local pool's workers have them
+        loaded before their first unit, imported once by the process's forkserver where the run starts it
+        (gearlab.engine.load_scenario keeps them as Scenario.unit_modules); () where its units load nothing of note."""
+
     def run(self, scenario: Scenario, run: RunDir, on_event: EventSink) -> None:
         """Do the work into *run*: append one record per finished unit (skipping those already
         in run.records(), so --resume redoes nothing), write summary.json and the tables."""

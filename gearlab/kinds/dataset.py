@@ -18,7 +18,7 @@ from ..files import matched
 from ..runs import RunDir
 from ..scenario import Scenario, location
 from ..signals import order_spectrum
-from .common import DATASET_TABLE, dataset_spec, executor_for, no_compare, no_table, no_title, sized
+from .common import BUILDS, DATASET_TABLE, dataset_spec, executor_for, no_compare, no_table, no_title, sized
 
 TABLES = {"datasets": DATASET_TABLE}
 OVERRIDES: tuple[str, ...] = ()  # no key is set from the command line
@@ -74,6 +74,10 @@ def class_counts(dataset) -> dict[str, int]:
     if unlabelled(dataset):
         return {"unlabelled": len(dataset)}
     return {name: int((dataset.label == c).sum()) for c, name in enumerate(dataset.spec.class_names)}
+
+
+def unit_modules(scenario: Scenario) -> tuple[str, ...]:
+    return BUILDS
 
 
 def run(scenario: Scenario, run: RunDir, on_event) -> None:

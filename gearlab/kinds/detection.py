@@ -72,7 +72,7 @@ from ..data.readers.headers import validating
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError, did_you_mean, shown
 from ..events import Event, ignore_events
-from ..executors import Aside, Executor, Shared
+from ..executors import Aside, Shared
 from ..gearbox.simulation import gearbox_of, label, referenced
 from ..learn.config import Calibration, check_length
 from ..learn.protocol import Method, Protocol, domain_adapting, each_draw, shared_state
@@ -408,6 +408,17 @@ def quick(scenario: Scenario) -> None:
     scenario.spec = replace(scenario.spec, protocol=shorter)
 
 
+def unit_modules(scenario: Scenario) -> tuple[str, ...]:
+    """The records' reader (a multi-file target is read on the pool), then the trainings' first imports."""
+    return (
+        "gearlab.parts.measured",
+        "torch",
+        "scipy.stats",
+        "gearlab.learn.protocol",
+        f"{__package__}.detection_units",
+    )
+
+
 def run(scenario: Scenario, run: RunDir, on_event) -> None:
     spec = scenario.spec
     protocol, d = spec.protocol, spec.detection
@@ -430,8 +441,6 @@ def run(scenario: Scenario, run: RunDir, on_event) -> None:
 
         first = structure if said == "gearbox" else None
         conditions = read_target(spec.target, d.blocks, on_event, where, shaft, continuous, executor, first)
-        if isinstance(executor, Executor):  # what the trainings load first, loaded while they are prepared
-            executor.warm(("torch", "scipy.stats", "gearlab.learn.protocol", __package__ + ".detection_units"))
         if said == "gearbox" and (differs := structure()):
             raise GearlabInputError(differs)
         folds = {c: folds_of(d.history_fit, cond, c, scenario.path) for c, cond in conditions.items()}

@@ -61,13 +61,14 @@ from .common import (
     sized,
     with_source_gearbox,
 )
-from .gap_inputs import (
+from .gap_inputs import (  # noqa: F401 (unit_modules: the kind contract's)
     Records,
     TargetEntry,
     check_healthy,
     check_points,
     check_sampling,
     read_history,
+    unit_modules,
     units_declared,
     units_warning,
 )

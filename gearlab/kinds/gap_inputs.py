@@ -13,7 +13,7 @@ from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event
 from ..parts.measured import Target
-from .common import SPEED_GROUP, DatasetEntry, measured, unconfirmed_speed
+from .common import FITS, SPEED_GROUP, TRAINS, DatasetEntry, measured, unconfirmed_speed
 
 # The gap statistics need at least this many healthy revolutions per side (gearlab.gap.stats).
 MIN_HEALTHY = 10
@@ -198,3 +198,9 @@ def check_points(points: float, z1: int, where: str, what: str) -> None:
             f"{points:.4g} samples per revolution, fewer than {need} needed to resolve mesh "
             f"order {z1} (a {z1}-tooth pinion) and its {SIDEBANDS} sidebands"
         )
+
+
+def unit_modules(scenario) -> tuple[str, ...]:
+    """The gap kind's (ScenarioKind.unit_modules): the fits', and the accuracy's trainings where it runs (a
+    measured history has no faults to score: the run skips it)."""
+    return FITS + (TRAINS if scenario.spec.accuracy and not isinstance(scenario.spec.target, Records) else ())

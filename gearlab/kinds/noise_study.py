@@ -45,6 +45,7 @@ from ..scenario import Scenario, Table, keys_of, location
 from ..settings import setting
 from ..signals import NOISE_KINDS
 from .common import (
+    BUILDS,
     DATASET_TABLE,
     NOISE_EFFECT,
     DatasetEntry,
@@ -230,6 +231,10 @@ def units(spec: Spec) -> list[tuple[str, int, str]]:
 
 def unit_name(noise: str, run: int, variant: str) -> str:
     return f"{noise}/{variant}/run{run}"
+
+
+def unit_modules(scenario: Scenario) -> tuple[str, ...]:
+    return (*BUILDS, "torch", __name__)  # the datasets' units, then the trainings (train_unit, here)
 
 
 def run(scenario: Scenario, run: RunDir, on_event) -> None:

@@ -22,7 +22,7 @@ from ..registry import get_registry
 from ..runs import RunDir
 from ..scenario import Scenario, Table, keys_of, location, plain_name
 from ..settings import setting, typed
-from .common import no_compare, no_table, no_title
+from .common import no_compare, no_table, no_title, no_unit_modules
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -354,6 +354,7 @@ def verdict_lines(summary: dict, records: list[dict]) -> list[str]:
 
 verdict_table, compare_table = no_table, no_compare  # the summary lines say the rest
 table_title = no_title
+unit_modules = no_unit_modules  # its run maps nothing
 
 
 def figure_captions(summary: dict) -> dict[str, tuple[str, str]]:

@@ -43,7 +43,7 @@ from ..parts.training import CALIBRATION, METHOD_KEYS, NETWORK, TRAINING, check_
 from ..runs import RunDir
 from ..scenario import Scenario, Table, keys_of, location
 from ..settings import setting, shrunk
-from .common import DATASET_TABLE, dataset_spec, device_of, executor_for, planned_counts, sized
+from .common import BUILDS, DATASET_TABLE, TRAINS, dataset_spec, device_of, executor_for, planned_counts, sized
 from .transfer_verdict import experiment, transfer_lines, transfer_table
 
 
@@ -156,13 +156,16 @@ def units(protocol: Protocol) -> list[tuple[int, int, Method]]:
     return [(rep, k, m) for rep in range(protocol.repetitions) for k in protocol.ks for m in protocol.methods]
 
 
+def unit_modules(scenario: Scenario) -> tuple[str, ...]:
+    """What every training loads first (2.7 s of CPU): the datasets' and the bound's units wait for it, the
+    trainings not at all."""
+    return BUILDS + TRAINS
+
+
 def run(scenario: Scenario, run: RunDir, on_event) -> None:
     spec = scenario.spec
     protocol = spec.protocol
     with executor_for(scenario) as executor:
-        # what every unit loads first (2.7 s of CPU): before the first map, the forkserver loads it once for all
-        # workers (LocalExecutor.warm); the datasets' and the bound's units wait for it, the trainings not at all
-        executor.warm(("torch", "gearlab.parts.training"))
         on_event(Event("stage", stage="datasets", total=2, message="datasets"))
         source, _ = load_or_build(spec.source, executor, on_event)
         on_event(Event("advance", stage="datasets", done=1, total=2))

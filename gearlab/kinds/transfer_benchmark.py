@@ -62,7 +62,9 @@ from ..scenario import Scenario, Table, keys_of, location
 from ..settings import MAX_SEED, setting, shrunk, typed
 from .common import (
     DATASET_TABLE,
+    FITS,
     SOURCE_KEYS,
+    TRAINS,
     device_of,
     executor_for,
     no_compare,
@@ -359,6 +361,10 @@ def correction_line(record: dict) -> str:
         + (f"; left out of the corrected source: {out}" if out else "")
         + (f"; {withheld}" if (withheld := correction_withheld(record)) else "")
     )
+
+
+def unit_modules(scenario: Scenario) -> tuple[str, ...]:
+    return FITS + TRAINS
 
 
 def run(scenario: Scenario, run: RunDir, on_event) -> None:

@@ -32,7 +32,17 @@ from ...registry import get_registry
 from ...runs import RunDir
 from ...scenario import Scenario, Table, keys_of, location
 from ...settings import setting, shrunk, typed
-from ..common import NOISE_MOVED, SOURCE_KEYS, SourceEntry, dataset_spec, executor_for, no_compare, no_table, no_title
+from ..common import (
+    FITS,
+    NOISE_MOVED,
+    SOURCE_KEYS,
+    SourceEntry,
+    dataset_spec,
+    executor_for,
+    no_compare,
+    no_table,
+    no_title,
+)
 from . import trials as bench
 
 MAX_TRIALS = 10000
@@ -158,6 +168,10 @@ def quick(scenario: Scenario) -> None:
         source=replace(spec.source, healthy=settings.healthy),
         revolutions=min(spec.revolutions, 40),
     )
+
+
+def unit_modules(scenario: Scenario) -> tuple[str, ...]:
+    return (*FITS, __name__ + ".trials")  # a trial is a diagnosis
 
 
 def run(scenario: Scenario, run: RunDir, on_event) -> None:
