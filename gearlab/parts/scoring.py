@@ -24,6 +24,9 @@ import hashlib
 import importlib
 import io
 import json
+import threading
+import zipfile
+from collections.abc import Iterator, Mapping
 
 import numpy as np
 
@@ -101,13 +104,45 @@ def save_arrays(target: Confined, **arrays) -> None:
     target.write(buf.getvalue())
 
 
-def load_arrays(source: Confined) -> dict[str, np.ndarray]:
+_DAMAGED = (ValueError, OSError, EOFError, zipfile.BadZipFile)
+
+
+class SavedArrays(Mapping):
+    """A saved npz's arrays by name (load_arrays), each read from the file's bytes at its first use and kept: a
+    take that `gearlab score` localises reads the envelope's history in one band of dozens (a condition's
+    localisation state: 992 arrays, 0.12 s of CPU read whole, at each call)."""
+
+    def __init__(self, source: Confined, data):
+        self._source, self._data, self._read = source, data, {}
+        self._lock = threading.Lock()  # one reader of the file's bytes at a time (the envelope's bands, read aside)
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        with self._lock:
+            if name not in self._read:
+                if name not in self._data.files:
+                    raise KeyError(name)
+                try:
+                    self._read[name] = self._data[name]
+                except _DAMAGED as exc:
+                    raise GearlabInputError(f"{self._source}: damaged ({exc}); run the scenario again") from None
+            return self._read[name]
+
+    def __contains__(self, name: object) -> bool:  # without reading the array (Mapping's reads it)
+        return name in self._data.files
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._data.files)
+
+    def __len__(self) -> int:
+        return len(self._data.files)
+
+
+def load_arrays(source: Confined) -> SavedArrays:
     if not source.exists():
         raise GearlabInputError(f"{source}: missing; expected the run's scoring state (run the scenario again)")
     try:
-        with np.load(io.BytesIO(source.read_bytes()), allow_pickle=False) as data:
-            return {k: data[k] for k in data.files}
-    except (ValueError, OSError, EOFError) as exc:
+        return SavedArrays(source, np.load(io.BytesIO(source.read_bytes()), allow_pickle=False))
+    except _DAMAGED as exc:
         raise GearlabInputError(f"{source}: damaged ({exc}); run the scenario again") from None
 
 

@@ -63,7 +63,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import threading
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -418,6 +418,11 @@ def read_state(bank: Bank | None) -> dict:
     return out
 
 
+def _saved_band(arrays: Mapping, prefix: str) -> dict:
+    """The arrays saved under *prefix*, without it: only those read (a run's saved arrays are read as used)."""
+    return {k.removeprefix(prefix): arrays[k] for k in arrays if k.startswith(prefix)}
+
+
 def restored_read(arrays: dict, table, rest: Callable[[], Bank]) -> Bank | None:
     """The bank read_state() saved in *arrays* (None where none was): its saved bands restored, any other read from
     rest()'s bank (the history's takes read again) on its first use."""
@@ -443,19 +448,14 @@ def restored(arrays: dict, table) -> Bank | None:
     """The envelope's bank state() saved in *arrays*; None where none was (a run stored before it was read); the
     whole residual's alone where no band was (a run stored before the bands were read: read as it was then). Each
     band's history is remade on its first use (the whole residual's now: one saved for another gearbox says so)."""
-    whole = {k.removeprefix("envelope_"): v for k, v in arrays.items() if k.startswith("envelope_")}
-    if not whole:
+    if not any(k.startswith("envelope_") for k in arrays):
         return None
     if "envelope_bands" not in arrays:
-        return Bank(bands(0.0)[:1], (L.History.restored(whole, table),), np.zeros(1))
+        return Bank(bands(0.0)[:1], (L.History.restored(_saved_band(arrays, "envelope_"), table),), np.zeros(1))
     candidates = np.asarray(arrays["envelope_bands"], dtype=np.float64)
 
     def read(indices: list[int]) -> list[L.History]:
-        prefixes = [_prefix(i) for i in indices]
-        return [
-            L.History.restored({k.removeprefix(p): v for k, v in arrays.items() if k.startswith(p)}, table)
-            for p in prefixes
-        ]
+        return [L.History.restored(_saved_band(arrays, _prefix(i)), table) for i in indices]
 
     hists = Histories(len(candidates), read)
     hists[0]  # noqa: B018 (remade now: a history saved for another gearbox says so here)
