@@ -50,11 +50,13 @@ from .views import (
     WAVEFORM_STATS,
     BandPlan,
     gear_ratio,
+    mesh_free,
     offset_removed,
     order_views_of_power,
     power_of_spectrum,
     record_blocks,
     record_view,
+    residual_view_of_rows,
     residual_view_of_spectrum,
     waveform_view,
     without_line,
@@ -419,9 +421,9 @@ class Scorer:
     spread (that point scores +6.6e4, the plain source 9.1e3), and a right model, v_s ≈ v_t,
     keeps its ≈ 0.
 
-    **Cheap**: the target's order bands, waveform statistics and rfft are computed once; a
-    source set costs one rfft (its order power and, by linearity, its TSA and both residuals'
-    spectra), two inverse FFTs for the residual sectors and the band sums (np.add.reduceat).
+    **Cheap**: the target's order bands, waveform statistics, rfft and mesh-free rows are computed
+    once; a source set costs one rfft (its order power and, by linearity, its TSA and both residuals'
+    spectra), the inverse FFT of its own residual and of its average's, and the band sums (np.add.reduceat).
 
     :meth:`report_gap` is the report's gap total (gap_report, pooled spread) on the same
     features, for the before/after numbers and tests.
@@ -448,6 +450,7 @@ class Scorer:
         self.plan = BandPlan.make(self.points, self.pair, highest=max_order)
         self.target_fft = np.fft.rfft(self.target, axis=1)
         self.target_power = np.mean(self.target * self.target, axis=1)
+        self.target_residual = mesh_free(self.target_fft.copy(), self.points, self.z1)
         order = order_views_of_power(power_of_spectrum(self.target_fft, self.points), self.plan)
         self.target_order = np.concatenate([v.features for v in order], axis=1)
         self.target_wave = waveform_view(self.target).features
@@ -467,7 +470,10 @@ class Scorer:
         order = order_views_of_power(power_of_spectrum(F, P), self.plan)
         tsa = F.mean(axis=0)  # the rfft of the source's synchronous average (linearity)
         own = residual_view_of_spectrum((F - tsa) * (n / (n - 1)), P, self.z1, np.mean(X * X, axis=1))
-        target_res = residual_view_of_spectrum(self.target_fft - tsa, P, self.z1, self.target_power)
+        # the target's residual against the source's average, by linearity: its own mesh-free rows (made once) less
+        # the average's, one inverse FFT of a row where one of every target row was made per call
+        against = self.target_residual - mesh_free(tsa[None, :].copy(), P, self.z1)
+        target_res = residual_view_of_rows(against, self.z1, self.target_power)
         Fs = np.concatenate([v.features for v in order] + [own.features, waveform_view(X).features], axis=1)
         Ft = np.concatenate([self.target_order, target_res.features, self.target_wave], axis=1)
         return Fs, Ft, list(self.sizes)

@@ -476,10 +476,20 @@ def residual_view_of_spectrum(
     The residual energy is floored at RESIDUAL_FLOOR of the row's own mean square: a residual
     that is only floating-point rounding (two noise-free sets of one simulator: about 1e-26 of
     the row's power, -261 dB) reads as the floor in both sets, not as a gap made of rounding."""
-    sectors = z1 if sectors is None else int(sectors)
+    return residual_view_of_rows(mesh_free(spectrum, P, z1), z1, row_power, sectors)
+
+
+def mesh_free(spectrum: np.ndarray, P: int, z1: int) -> np.ndarray:
+    """The rows (n, P) of the rfft *spectrum* (n, P//2 + 1; overwritten) without their DC line and mesh harmonics."""
     spectrum[:, 0] = 0.0
     spectrum[:, z1::z1] = 0.0
-    residual = np.fft.irfft(spectrum, n=P, axis=1)
+    return np.fft.irfft(spectrum, n=P, axis=1)
+
+
+def residual_view_of_rows(residual: np.ndarray, z1: int, row_power: np.ndarray, sectors: int | None = None) -> View:
+    """residual_view_of_spectrum's view of the residual rows (n, P) themselves (mesh_free)."""
+    sectors = z1 if sectors is None else int(sectors)
+    P = residual.shape[1]
     edges = np.round(np.arange(sectors + 1) * P / sectors).astype(int)
     energy = np.add.reduceat(residual * residual, edges[:-1], axis=1) / np.diff(edges)
     energy = np.maximum(energy, RESIDUAL_FLOOR * np.asarray(row_power, dtype=np.float64)[:, None])
