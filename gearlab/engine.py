@@ -20,6 +20,7 @@ from .executors import UnitLines
 from .files import cannot_write, write_problem
 from .kinds import SCENARIO_KINDS
 from .kinds.common import executor_for, stored_forms
+from .memo import keep_freed_heap
 from .report import write_report
 from .runinfo import Session
 from .runs import RunDir, check_inputs
@@ -190,6 +191,7 @@ def run_scenario(
         if resume is not None:
             scenario = _resumed_scenario(run, scenario_path, quick, overrides)
         on_event(Event("run", message=str(run.path)))
+        keep_freed_heap()
         on_event(Event("log", message=f"scenario {scenario.name} ({scenario.kind}) -> {run.path}"))
         session = Session(run, scenario.tables.get("execution"))  # run.json: who, where, when
         watcher = ProgressWatcher(run, on_event)

@@ -45,6 +45,7 @@ from .confined import Confined
 from .errors import GearlabInputError
 from .events import Board, units_report_to
 from .files import atomic_write
+from .memo import keep_freed_heap
 
 EXECUTORS = ("local", "ray")
 
@@ -276,6 +277,7 @@ def _worker_warning(message, category, filename, lineno, file=None, line=None) -
 
 def _worker_started() -> None:
     warnings.showwarning = _worker_warning
+    keep_freed_heap()
 
 
 def _imported(modules: tuple[str, ...]) -> None:
