@@ -4,6 +4,7 @@ is credited with."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 
@@ -187,7 +188,11 @@ def gap_lines(summary: Mapping) -> list[str]:
             )
     lines += _not_accepted(summary)
     lines += _unchecked(summary)  # the verdict holds for the structure as far as it was checked
-    lines += _level(summary)
+    level = (summary.get("structure") or {}).get("level") or {}
+    if decade(level.get("factor") or 0.0):
+        lines[1:1] = _level(summary)  # a decade's slip comes before the stand-ins fitted at it
+    else:
+        lines += _level(summary)
     lines += _alone_versus_credited(summary)
     acc = summary.get("accuracy") or {}
     pairs = [
@@ -219,12 +224,36 @@ def _unchecked(summary: Mapping) -> list[str]:
 LEVEL_SAID = 3.0
 
 
+# A factor within 10 % of a whole power of ten is said as that decade, first after the gap's line: a 27/61 + 22/53
+# box's sensitivity written 500 mV/g for its 50 mV/g sensor read 0.101 x, said last, below stand-ins fitted at that
+# level (a box described with defaults read 11.2 x its simulator: outside the tolerance, the plain line)
+DECADE_TOL = 0.10
+
+
+def decade(c: float) -> int:
+    """The power of ten (not 0) that the level factor *c* lies within DECADE_TOL of, else 0."""
+    if not c > 0:
+        return 0
+    k = round(math.log10(c))
+    return k if k and abs(math.log10(c) - k) < math.log10(1 + DECADE_TOL) else 0
+
+
 def _level(summary: Mapping) -> list[str]:
     """The line of a level far off the simulator's (LEVEL_SAID) that no scale alone closed, else []."""
     level = (summary.get("structure") or {}).get("level") or {}
     c = level.get("factor")
     if c is None or level.get("closes") or 1 / LEVEL_SAID < c < LEVEL_SAID:
         return []
+    if k := decade(c):
+        scaled, before = level.get("gap_scaled"), summary.get("gap_before")
+        gap = f"; scaled by it, the gap {before:.4g} -> {scaled:.4g}" if scaled is not None and before else ""
+        n = f"{10 ** abs(k):g}"
+        return [
+            f"Level: a scale factor of ~{n} (the records' synchronous lines stand {c:.3g} x the simulator's{gap}): "
+            f"a whole decade, as a sensitivity or gain written {n} x off reads (or a box that far off its "
+            "description's level): give sensitivity and gain (the values: line of gearlab inspect says how the "
+            "values became m/s²); the effects here were fitted at the level as given."
+        ]
     return [
         f"Level: the records' synchronous lines stand {c:.3g} x the simulator's (a scale alone does not close the "
         "gap): the description's defaults and load set its level, but a sensitivity or gain off by as much reads "
