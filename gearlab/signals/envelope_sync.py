@@ -61,6 +61,7 @@ Everything is numpy: no torch, nothing from the layers above.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import threading
 from collections.abc import Callable, Mapping, Sequence
@@ -115,26 +116,51 @@ def less_lines_between_bins(revolutions: np.ndarray, table) -> np.ndarray:
     (the take's length: a run-down's, a slower take's) and on its level (the load's), not on the gearbox's health,
     and its envelope beats at the shafts' orders (a 22/71 + 27/86 + 34/107 box's output run-out, 17.56 turns in
     its 568-turn piece, put 20-30 times the residual's power into the first output turn). A line is strong where
-    its bin holds over STRONG of the record's power."""
+    its bin holds over STRONG of the record's power.
+
+    A line at order o over the revolutions' turns i and shares j / points of a turn is the outer product of
+    u = exp(2πi o i) and v = exp(2πi o j / points): its least squares reads the record through two products of the
+    (R, points) record with v's parts and its 2 x 2 normal matrix from sums over u and v alone (|z|² and z² of an
+    outer product are their sums' products), and it leaves as two outer products; the lines go one after another, as
+    each is fitted on the record the earlier ones left (89 revolutions of 4096 points, 10 lines: 0.05 s of CPU, where
+    each line's full-length product took 0.6 s)."""
     revs = np.asarray(revolutions, dtype=np.float64)
     count, points = revs.shape
-    y = revs.reshape(-1) - revs.mean()
-    power = np.abs(np.fft.rfft(y)) ** 2
+    y = revs - revs.mean()
+    power = np.abs(np.fft.rfft(y.reshape(-1))) ** 2
     floor = STRONG * power.sum()
     turns, within = np.arange(count), np.arange(points) / points  # the angle in turns: a turn and a share of one
-    for stage in table.stages:
-        shafts = (stage.pinion_shaft_order, stage.wheel_shaft_order)
-        for h in range(int(points / 2 / stage.mesh) + 1):  # h = 0: the shafts' own lines (a run-out's)
-            for o in {h * stage.mesh + j * s for s in shafts for j in range(-SIDEBANDS, SIDEBANDS + 1)}:
-                at = float(o) * count  # the line's place in bins
-                if o <= 0 or at >= power.size - 1 or power[round(at)] < floor:  # a line on a bin goes whole too
-                    continue
-                z = np.outer(np.exp(2j * np.pi * float(o) * turns), np.exp(2j * np.pi * float(o) * within)).ravel()
-                c, s = z.real.copy(), z.imag.copy()
-                gram = np.array([[c @ c, c @ s], [c @ s, s @ s]])
-                a, b = np.linalg.solve(gram, np.array([c @ y, s @ y]))
-                y -= a * c + b * s
-    return y.reshape(count, points)
+    stages = [(s.mesh, s.pinion_shaft_order, s.wheel_shaft_order) for s in table.stages]
+    orders = np.concatenate([_line_orders(*stage, points) for stage in stages])
+    at = orders * count  # each line's place in bins; a line on a bin goes whole too
+    inside = (orders > 0) & (at < power.size - 1)
+    inside[inside] = ~(power[np.round(at[inside]).astype(int)] < floor)
+    for o in orders[inside]:
+        u, v = np.exp(2j * np.pi * o * turns), np.exp(2j * np.pi * o * within)
+        # the line's cosine and sine against the record, c·y + i s·y (einsum: no BLAS threads spun for a product of a
+        # few ms, which on a busy machine took 16 ms of CPU for 0.35)
+        yv = np.einsum("ij,kj->ik", y, np.stack([v.real, v.imag]))
+        t = u @ (yv[:, 0] + 1j * yv[:, 1])
+        # c·c + s·s and c·c - s·s + 2i c·s: the sums of |z|² and z² of the outer product
+        whole, sq = np.sum(np.abs(u) ** 2) * np.sum(np.abs(v) ** 2), np.sum(u * u) * np.sum(v * v)
+        gram = np.array([[whole + sq.real, sq.imag], [sq.imag, whole - sq.real]]) / 2
+        a, b = np.linalg.solve(gram, np.array([t.real, t.imag]))
+        wu = (a - 1j * b) * u  # a c + b s: the real part of (a - ib) z
+        y -= np.outer(wu.real, v.real)
+        y += np.outer(wu.imag, v.imag)
+    return y
+
+
+@functools.lru_cache(maxsize=32)
+def _line_orders(mesh, pinion, wheel, points: int) -> np.ndarray:
+    """The input orders of a stage's lines less_lines_between_bins fits, in its order: each mesh harmonic h (0: the
+    shafts' own lines) with SIDEBANDS of its shafts' orders *pinion*, *wheel* beside it, up to half of *points* (exact
+    fractions: a line two shafts share is fitted once); the same for every take of a gearbox read at one length."""
+    shafts = (pinion, wheel)
+    found = []
+    for h in range(int(points / 2 / mesh) + 1):
+        found += [float(o) for o in {h * mesh + j * s for s in shafts for j in range(-SIDEBANDS, SIDEBANDS + 1)}]
+    return np.array(found)
 
 
 def sound(revolutions: int, table) -> tuple[int, int]:
