@@ -164,6 +164,15 @@ def mesh_check(
         for mesh, shaft_orders in later:
             read_k |= on_comb(x, k * mesh, tuple(k * o for o in shaft_orders), tol)
         odd |= on & ~read_k
+        # ... nor later meshes' harmonics, two at least, that the k-turn reading holds as sidebands alone: a later
+        # stage's lines are read k times too (a 135/405 last stage described 15/45: its 15, 30, 45 under stage 2's
+        # 66 and 78, 11 and 13 x 6, which the 2-turn reading's 12 lacks; 'pulses_per_rev?' blamed the tacho)
+        later_bare = np.zeros(x.size, dtype=bool)
+        read_bare = on_comb(x, k * z1, (), tol)
+        for mesh, _ in later:
+            later_bare |= on_comb(x, mesh, (), tol)
+            read_bare |= on_comb(x, k * mesh, (), tol)
+        odd |= (later_bare & ~read_bare) if np.sum(later_bare & ~read_bare) >= 2 else False
         if abs(x[first] - k * z1) <= tol[first] and hit.sum() >= 2 and not (bare & ~hit).any() and not odd.any():
             out.update(measured=k * z1, differs=True, marks=1 / k)
             return out

@@ -10,6 +10,12 @@ count at h M' alone. The lines that decide are those nothing else explains: off 
 their sidebands, off the rival family's harmonics and sidebands. Where most of them (HELD) sit on the described comb,
 at least OWN_LINES and CHANCE times what so dense a comb holds by chance, the description stands. A count really off
 leaves only chance lines there: the real mesh's own lines and sidebands are the rival's.
+
+A stage read at M with no line there is checked against the same lines (comb_reading): M's comb seen only on
+every n-th harmonic, the others empty where it is seen, is n times the teeth (a 45/135 last stage described 15/45:
+lines at 1.667 k, k = 3, 6 ... 42, none at 4, 5, 7 ...); lines between M's harmonics on M / n's, none of another
+stage's, are z / n teeth (15/45 described 30/90 or 45/135); and a family made of other stages' harmonics alone (a
+16/48 description read on 48, 96, 105, 231, within a line's tolerance of 1.778 h) is no evidence of M.
 """
 
 from __future__ import annotations
@@ -23,6 +29,8 @@ SIDEBANDS = 3  # the sidebands j o of either shaft a mesh harmonic carries (the 
 OWN_LINES = 3  # the described comb's unexplained lines a reading on it needs (one line is a tone)
 HELD = 0.5  # the share of the unexplained lines the described comb must hold
 CHANCE = 2.0  # ... and this many times what its windows (2 tol / M of the axis) hold by chance
+RELATED = range(2, 10)  # the multiples and divisors of a described count that comb_reading weighs
+MIN_TEETH = 6  # no pinion has fewer
 
 
 def on_comb(x: np.ndarray, z: float, shaft_orders, tol: np.ndarray) -> np.ndarray:
@@ -45,3 +53,70 @@ def described_holds(lines: Lines, m: float, rival: float, shafts, others, bin_: 
     held = int(np.sum(free & on_comb(x, m, (), tol)))
     chance = float(np.sum(np.minimum(1.0, 2 * tol[free] / m)))
     return held >= OWN_LINES and held >= HELD * np.sum(free) and held >= CHANCE * chance
+
+
+def _explained(x: np.ndarray, others, tol: np.ndarray) -> np.ndarray:
+    """Which orders *x* the *others* ((mesh order, shaft orders ...) each) explain: a harmonic or a sideband."""
+    out = np.zeros(x.size, dtype=bool)
+    for mesh, *shafts_of in others:
+        out |= on_comb(x, mesh, [o for orders in shafts_of for o in orders], tol)
+    return out
+
+
+def comb_reading(lines: Lines, m: float, shafts, others, bin_: float, rests_on=None) -> tuple[int, float] | None:
+    """(index of the strongest line, mesh order refitted over its harmonics) of the comb that says a stage read at its
+    described mesh *m* with no line there (*shafts*: its pinion's and wheel's shaft orders; *others*: as
+    described_holds's) is another count's, or None where the lines bear m out or say nothing (module doc). The lines
+    that decide are those up to m's MAX_HARMONIC-th harmonic that no other stage explains:
+    * m's harmonics holding them, OWN_LINES at least, are all multiples of n: m's other harmonics between the first
+      and the last held stand empty (no line at all), OWN_LINES and HELD of them at least: n times the count;
+    * a comb m / n (n | z) holds OWN_LINES of them off m's harmonics and sidebands, CHANCE times what its windows there
+      hold by chance: the mesh shows lines between those the description puts, z / n teeth;
+    * the reading rests on lines all on other stages' mesh harmonics (*rests_on*, or None where m's comb was weighed
+      already): no evidence of m; where m's comb holds fewer than OWN_LINES and CHANCE times chance, a count 1-3 off
+      whose comb holds them (OWN_LINES, HELD, CHANCE times chance) says it."""
+    x = lines.at
+    tol = tol_mesh(x, bin_)
+    free = ~_explained(x, others, tol) & (x <= MAX_HARMONIC * m + tol)
+    if np.sum(free) < OWN_LINES:
+        return None
+    xf, tf, af = x[free], tol[free], lines.amp[free]
+    on_m = on_comb(xf, m, (), tf)
+    held = np.round(xf[on_m] / m).astype(int)
+    n = int(np.gcd.reduce(held)) if held.size >= OWN_LINES else 1
+    if n >= 2:
+        band = np.arange(held.min(), held.max() + 1)
+        at = band[band % n != 0] * m
+        empty = ~np.any(np.abs(x[None, :] - at[:, None]) <= tol_mesh(at, bin_)[:, None], axis=1)
+        if np.sum(empty) >= OWN_LINES and np.sum(empty) >= HELD * at.size:
+            return _refit(xf, af, on_m, n * m, np.flatnonzero(free))
+    z = round(m / float(shafts[0]))
+
+    def comb(c: float) -> tuple[np.ndarray, float]:
+        return on_comb(xf, c, (), tf), float(np.sum(np.minimum(1.0, 2 * tf / c)))
+
+    meshes = [float(c) for c, *_ in others]  # m's harmonics +- theirs (a train's meshes modulate each other)
+    for n in sorted((n for n in RELATED if z % n == 0 and z // n >= MIN_TEETH), reverse=True):
+        hit, chance = comb(m / n)
+        extra = hit & ~on_comb(xf, m, (*shafts, *meshes), tf)
+        if np.sum(extra) >= OWN_LINES and np.sum(extra) >= CHANCE * chance * (1 - 1 / n):
+            return _refit(xf, af, hit, m / n, np.flatnonzero(free))
+    rests = None if rests_on is None else np.asarray(rests_on, dtype=float)
+    if rests is None or not np.all(_explained(rests, [(c, ()) for c in meshes], tol_mesh(rests, bin_))):
+        return None
+    own, chance = comb(m)
+    if np.sum(own) >= OWN_LINES and np.sum(own) >= CHANCE * chance:
+        return None
+    best = None
+    for j in (j for j in (-3, -2, -1, 1, 2, 3) if z + j >= MIN_TEETH):
+        hit, chance = comb((z + j) * float(shafts[0]))
+        count = int(np.sum(hit))
+        if count >= max(OWN_LINES, HELD * xf.size, CHANCE * chance) and (best is None or count > best[0]):
+            best = (count, hit, (z + j) * float(shafts[0]))
+    return None if best is None else _refit(xf, af, best[1], best[2], np.flatnonzero(free))
+
+
+def _refit(x: np.ndarray, amp: np.ndarray, hit: np.ndarray, c: float, index: np.ndarray) -> tuple[int, float]:
+    """(index into the lines of the strongest line *hit*, the mesh order c refitted over its harmonics, by power)."""
+    h, w = np.round(x[hit] / c), amp[hit] ** 2
+    return int(index[hit][np.argmax(w)]), float(np.sum(w * h * x[hit]) / np.sum(w * h * h))

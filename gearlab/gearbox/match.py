@@ -13,7 +13,7 @@ import re
 
 import numpy as np
 
-from .described_comb import described_holds
+from .described_comb import comb_reading, described_holds
 from .description import Gearbox
 from .modulated import centre
 from .orders import order_table
@@ -349,7 +349,7 @@ def check_description(
         family = mesh_family(lines, o_p, bin_, span, theirs, look, o_tacho)
         if family is not None and k in ahead:
             family = ahead_family(lines, family, ahead[k], bin_, theirs)
-        i = None
+        i = rests = None
         if lines.near(look, tol_mesh(look, bin_)) is not None:
             # a line at M: M, or a sideband of the real mesh M + j o (a tooth count off by j)? o: the
             # pinion's shaft, or the wheel's (a tacho on the output read through a first wheel one tooth
@@ -373,7 +373,13 @@ def check_description(
                 if described_holds(lines, look, family[0], (o_p, o_w), shown, bin_):
                     i, measured = harmonic_comb(lines, [look], bin_, theirs) or (None, look)
             if i is None or (divisor and len(own) >= 2):
-                measured, i = family[:2]
+                measured, i, rests = family
+        at_m = lines.near(look, tol_mesh(look, bin_)) is not None
+        if i is not None and not at_m and abs(measured - look) <= tol_mesh(look, bin_):
+            # read with no line at M: the lines nothing else explains may say another count (gearbox.described_comb)
+            o_w = measured_shaft.get(k + 1, (float(s.wheel_shaft_order),))[0]
+            shown = [*beyond, *other_stages(table, k, moved, measured_shaft, leads, ahead)]
+            i, measured = comb_reading(lines, look, (o_p, o_w), shown, bin_, rests) or (i, measured)
         # a wheel upstream a tooth or three off moves M by no whole order of the pinion's shaft (outshone.counts)
         upstream = [c * look / expected for c, *_ in counts(table, k)] if leads else []
         if i is None and family is None and not behind:
