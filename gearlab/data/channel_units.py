@@ -45,6 +45,13 @@ _ACCELERATION_NAME = re.compile(
 _METRES_PER_S2 = ("m/s^2", "m/s²", "m/s/s", "ms2", "mps2", "m/s2", "ms^-2", "ms-2")
 
 
+# A volt or millivolt spelled out, compared in lower case without blanks: a 'unit' key's (declared_unit) and a file's
+# (unit_scale) alike. NI's DAQ software states a voltage channel's unit as 'Volts' (a TDMS channel's unit_string, kept
+# in its HDF5 export): it was 'values: unknown (the file's unit 'Volts' is not read ...)', read as m/s² where the
+# sensitivity was left out, not refused for it as 'V' is
+_VOLTS_SPELLED = {"volt": "V", "volts": "V", "millivolt": "mV", "millivolts": "mV"}
+
+
 def _plain(unit: str) -> str:
     return re.sub(r"[\s·]", "", unit.lower()).replace("**", "^").replace("⁻²", "^-2")
 
@@ -104,6 +111,8 @@ def unit_scale(text: str) -> tuple[str, str, float] | None:
         return "acceleration", unit, float(g["number"] or 1.0) * prefix * STANDARD_GRAVITY
     if _plain(unit) in _METRES_PER_S2:  # as names write it (ms2 is not ms², m/s2 not m per s2)
         return "acceleration", unit, 1.0
+    if spelled := _VOLTS_SPELLED.get(re.sub(r"\s", "", unit).lower()):
+        return "voltage", unit, 1e-3 if spelled == "mV" else 1.0
     if not re.search(r"[A-Za-zµ]", unit):
         return None
     for quantity, si in (("voltage", "V"), ("acceleration", "m/s^2")):
@@ -177,9 +186,8 @@ def level_hint(units: str, values: np.ndarray, key: str) -> str:
 # What a measured entry's 'unit' key may say of a vibration channel whose name and file say nothing
 # (a headerless text column): the quantity and factor are name_unit's, as if the name ended in it.
 UNITS = ("m/s^2", "m/s²", "g", "V", "mV")
-# ... and a volt or millivolt as it is spelled out ('volts', 'Volt', 'millivolts'), compared in lower case without
-# blanks; the symbols themselves stay case-sensitive ('G' is no g, 'MV' no mV)
-_VOLTS_SPELLED = {"volt": "V", "volts": "V", "millivolt": "mV", "millivolts": "mV"}
+# ... and a volt or millivolt as it is spelled out ('volts', 'Volt', 'millivolts': _VOLTS_SPELLED), as a file states it
+# too (unit_scale); the symbols themselves stay case-sensitive ('G' is no g, 'MV' no mV)
 
 
 def declared_unit(value, where: str):
