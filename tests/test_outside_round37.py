@@ -11,6 +11,11 @@ from __future__ import annotations
 import h5py
 import numpy as np
 import pytest
+import scipy.io
+from gearboxes import description, inspected, read_as_described, stage, text_rows
+from scipy.io import wavfile
+
+G = 9.80665
 
 
 def _take(stages, speed, fs, seconds, seed, gains=None):
@@ -35,6 +40,157 @@ def _take(stages, speed, fs, seconds, seed, gains=None):
 
 def _pulses(angle, marks=1):
     return np.where(np.mod(angle * marks / (2 * np.pi), 1.0) < 0.15, 4.0, 0.0)
+
+
+A = ((23, 59), (19, 71))
+BOX_A = description(
+    stage(23, 59, module="2.5 mm", width="25 mm", bores=("25 mm", "40 mm")),
+    stage(19, 71, module="3 mm", width="30 mm", bores=("35 mm", "50 mm")),
+    name="boxA",
+    speed="1750 rpm",
+    load="120 N*m",
+    near="input",
+)
+
+
+@pytest.fixture(scope="module")
+def box_a(tmp_path_factory):
+    where = tmp_path_factory.mktemp("r37_a")
+    a, _, hz = _take(A, 1750 / 60, 6400.0, 12.0, seed=1)
+    scipy.io.savemat(where / "take.mat", {"acc": a[:, None], "fs": 6400.0, "acc_unit": "m/s^2"}, format="5")
+    (where / "boxA.toml").write_text(BOX_A)
+    (where / "boxA_72.toml").write_text(BOX_A.replace("z = 71", "z = 72"))
+    (where / "boxA_18.toml").write_text(BOX_A.replace("z = 19", "z = 18"))
+    return where, hz
+
+
+def test_a_two_stage_mat_in_m_s2_without_a_tacho_reads_its_speed_and_meshes(cli, box_a):
+    where, hz = box_a
+    report = inspected(cli, where / "take.mat", "--gearbox", where / "boxA.toml")
+    read_as_described(report, hz, [23, 23 * 19 / 59])
+
+
+@pytest.mark.parametrize(
+    "toml, said",
+    [
+        ("boxA_72.toml", "the wheel on the output shaft shows 71.0"),
+        ("boxA_18.toml", "a 19-tooth pinion on the intermediate shaft? described 18"),
+    ],
+)
+def test_a_later_stage_count_one_off_is_named(cli, box_a, toml, said):
+    where, _ = box_a
+    code, out, err = cli("inspect", where / "take.mat", "--gearbox", where / toml)
+    assert code == 0, err
+    assert said in " ".join(out.split()), out[-1500:]
+
+
+BOX_B = description(
+    stage(37, 89, module="2 mm", bores=("30 mm", "50 mm")),
+    name="boxB",
+    speed="12 Hz",
+    load="300 N*m",
+    near="input",
+    tacho="input",
+    marks=2,
+)
+B_KEYS = ("--vibration", "0", "--tacho", "1", "--gain", "5 V", "--sensitivity", "100 mV/g")
+
+
+@pytest.fixture(scope="module")
+def box_b(tmp_path_factory):
+    where = tmp_path_factory.mktemp("r37_b")
+    a, shafts, hz = _take(((37, 89),), 12.0, 8000.0, 4.0, seed=2)
+    volts = a / G * 0.1  # 100 mV/g
+    counts = np.stack([volts, _pulses(shafts[0], 2)], axis=1) / 5.0 * 32767  # full scale 5 V
+    wavfile.write(where / "take.wav", 8000, np.round(counts).astype(np.int16))
+    (where / "boxB.toml").write_text(BOX_B)
+    (where / "boxB_one_mark.toml").write_text(BOX_B.replace("pulses_per_rev = 2\n", ""))
+    return where, hz
+
+
+def test_b_int16_stereo_wav_at_its_full_scale_reads_speed_and_mesh_by_two_marks(cli, box_b):
+    where, hz = box_b
+    report = inspected(cli, where / "take.wav", "--gearbox", where / "boxB.toml", *B_KEYS)
+    read_as_described(report, hz, [37])
+    code, out, err = cli("inspect", where / "take.wav", "--gearbox", where / "boxB.toml", *B_KEYS)
+    assert "m/s² = value x 490.332, 50 g a file unit (5 V / 100 mV/g)" in out, out[:600]
+
+
+def test_b_two_marks_a_turn_left_out_of_the_description_are_named(cli, box_b):
+    where, _ = box_b
+    code, out, err = cli("inspect", where / "take.wav", "--gearbox", where / "boxB_one_mark.toml", *B_KEYS)
+    assert code == 0, err
+    assert "the tacho gives 2 pulse(s) per revolution, not 1?" in " ".join(out.split()), out[-1500:]
+
+
+C = ((29, 53), (21, 88))
+BOX_C = description(
+    stage(29, 53, module="2 mm", width="18 mm", bores=("20 mm", "30 mm")),
+    stage(21, 88, module="2.5 mm", width="24 mm", bores=("30 mm", "45 mm")),
+    name="boxC",
+    speed="45 Hz",
+    load="60 N*m",
+    near="input",
+    tacho="intermediate",
+)
+
+
+@pytest.fixture(scope="module")
+def box_c(tmp_path_factory):
+    where = tmp_path_factory.mktemp("r37_c")
+    near_in, shafts, hz = _take(C, 45.0, 12800.0, 6.0, seed=3, gains=[1.0, 0.4])
+    near_out, _, _ = _take(C, 45.0, 12800.0, 6.0, seed=3, gains=[0.3, 1.0])
+    with h5py.File(where / "take.h5", "w") as f:
+        data = f.create_dataset("data", data=np.stack([near_in / G, near_out / G, _pulses(shafts[1])], axis=1))
+        data.attrs["channel_names"] = ["acc_in", "acc_out", "tacho"]
+        data.attrs["units"] = ["g", "g", "V"]
+        f.attrs["fs"] = 12800.0
+    (where / "boxC.toml").write_text(BOX_C)
+    (where / "boxC_tacho_in.toml").write_text(BOX_C.replace('tacho = "intermediate"', 'tacho = "input"'))
+    return where, hz
+
+
+def test_c_hdf5_columns_named_by_attribute_read_in_g_with_a_tacho_on_the_intermediate_shaft(cli, box_c):
+    where, hz = box_c
+    keys = ("--gearbox", where / "boxC.toml", "--vibration", "acc_out", "--tacho", "tacho")
+    read_as_described(inspected(cli, where / "take.h5", *keys), hz, [29, 29 * 21 / 53])
+    code, out, err = cli("inspect", where / "take.h5", *keys)
+    assert "values: m/s² = value x 9.80665 (channel 'acc_out' in g)" in out, out[:600]
+
+
+def test_c_a_tacho_on_the_intermediate_shaft_described_on_the_input_is_named(cli, box_c):
+    where, _ = box_c
+    keys = ("--gearbox", where / "boxC_tacho_in.toml", "--vibration", "acc_in", "--tacho", "tacho")
+    code, out, err = cli("inspect", where / "take.h5", *keys)
+    assert code == 0, err
+    assert "--tacho-shaft intermediate" in out, out[-1500:]
+
+
+BOX_D = description(
+    stage(41, 43, module="1.5 mm", width="15 mm"), name="boxD", speed="30 Hz", load="40 N*m", tacho="input"
+)
+D_KEYS = ("--vibration", "acc (V)", "--tacho", "tacho (V)", "--sensitivity", "10.2 mV/(m/s^2)")
+
+
+@pytest.fixture(scope="module")
+def box_d(tmp_path_factory):
+    where = tmp_path_factory.mktemp("r37_d")
+    a, shafts, hz = _take(((41, 43),), 30.0, 10000.0, 3.0, seed=4)
+    ms = np.arange(a.size) / 10.0  # 10 kHz, in ms
+    rows = text_rows("%.3f,%.6f,%.1f", ms, a * 0.0102, _pulses(shafts[0]))
+    (where / "take.csv").write_text("t (ms),acc (V),tacho (V)\n" + rows)
+    (where / "boxD.toml").write_text(BOX_D)
+    (where / "boxD_42.toml").write_text(BOX_D.replace("z = 41", "z = 42"))
+    return where, hz
+
+
+def test_d_csv_whose_time_is_in_ms_reads_its_rate_and_a_near_unity_pair(cli, box_d):
+    where, hz = box_d
+    read_as_described(inspected(cli, where / "take.csv", "--gearbox", where / "boxD.toml", *D_KEYS), hz, [41])
+    code, out, err = cli("inspect", where / "take.csv", "--gearbox", where / "boxD_42.toml", *D_KEYS)
+    assert code == 0, err
+    assert "at 10 kHz (time 't (ms)' (x 0.001 s))" in out, out[:600]
+    assert "a 41-tooth pinion on the input shaft? described 42" in " ".join(out.split()), out[-1500:]
 
 
 @pytest.mark.parametrize("unit, volts", [("Volts", 1.0), ("VOLT", 1.0), ("Millivolts", 1e-3)])
