@@ -212,3 +212,30 @@ def test_a_file_unit_spelled_out_as_ni_writes_it_is_read_as_volts(tmp_path, cli,
     code, out, err = cli("inspect", tmp_path / "ni.h5", "--speed", "30 Hz")
     assert code == 0, err
     assert f"not m/s² (channel 'acc' is in volts ({unit}, as the file's unit '{unit}' says)" in out, out[:600]
+
+
+def _csv_of_wav_take(path):
+    a, shafts, _ = _take(((37, 89),), 12.0, 2000.0, 0.5, seed=6)
+    t = np.arange(a.size) / 2000.0
+    path.write_text("time_s,acc_V,tacho_V\n" + text_rows("%.7f,%.6f,%.3f", t, a / G * 0.1, _pulses(shafts[0], 2)))
+    return path
+
+
+def test_score_of_a_csv_on_a_wav_run_asks_for_its_channels_not_its_time_column(tmp_path):
+    # B's run read WAVs with the [target]'s vibration '0' and tacho '1'; next week's take converted to a CSV with a
+    # header (time_s, acc_V, tacho_V) held a column '0', its time: 'gearlab score' read it and stopped at "'0' is
+    # B_next_week.csv's time or rate column 'time_s' (column 0 counts it); expected a signal channel", with no word
+    # of --key, which the guide's step 7 and the line for a file without the channels give
+    from types import SimpleNamespace
+
+    from gearlab.errors import GearlabInputError
+    from gearlab.kinds.detection_scoring import file_keys, remembered
+
+    target = {"vibration": "0", "tacho": "1", "gain": "5 V", "sensitivity": "100 mV/g"}
+    files = [SimpleNamespace(path=f"rec/B_{r}.wav", role=r, keys={}) for r in ("history1", "history2", "test")]
+    meta = {"target": target, "file_keys": file_keys(files)}
+    take = _csv_of_wav_take(tmp_path / "next.csv")
+    with pytest.raises(GearlabInputError, match="--key vibration=NAME --key tacho=NAME") as refused:
+        remembered(meta, str(take))
+    assert "the run's no files'" not in str(refused.value), refused.value  # every file read with the [target]'s
+    assert remembered(meta, str(take), {"vibration": "acc_V", "tacho": "tacho_V"})[0] == {}

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from ..data.channel_units import kept_gain, read_gain
+from ..data.readers.base import is_rate_or_time
 from ..data.recordings import channel_key, channel_listing, cut_recording, read_header
 from ..data.textzip import CALIBRATION, calibration
 from ..data.which_gear import Take
@@ -237,10 +238,11 @@ def remembered(meta: dict, file: str, given: dict | None = None) -> tuple[dict, 
         said.setdefault(", ".join(f"{k} '{n}'" for k, n in names.items()), []).append(whose)
     asked = " --key tacho=NAME" if _tacho_records(meta) != "none" else ""
     if foreign:
-        others = ", ".join(e for e, k in formats.items() if k) or "no"
+        others = ", ".join(e for e, k in formats.items() if k)  # none: every file read with the [target]'s
+        others = f", not another file's own (the run's {others} files')" if others else ""
         raise GearlabInputError(
             f"{file}: a {fmt or 'suffix-less'} file, a format the run read none of, is read with the [target]'s keys "
-            f"alone, not another file's own (the run's {others} files'): {', '.join(said)} not in it; the file has: "
+            f"alone{others}: {', '.join(said)} not in it; the file has: "
             f"{channel_listing(header.channels)}; expected its channels, and its units where the [target]'s do not "
             f"hold: gearlab score RUN FILE --key vibration=NAME{asked} [--key sensitivity=... | gain=... | unit=...]"
         )
@@ -259,9 +261,16 @@ def _channel_names(channels: dict) -> dict:
 def _fits(header, channels: dict, indexed: bool) -> bool:
     """Whether *header* holds the vibration and tacho *channels* name, by name (or, *indexed*, by column index)."""
     names = _channel_names(channels).values()
-    if indexed:
-        return not header.channels or all(header.find(n) for n in names)
+    if indexed:  # a column index on the file's time column is none (the reader refuses it: readers.base.not_time)
+        return not header.channels or all(header.find(n) and not _on_time(header, n) for n in names)
     return bool(header.channels) and all(header.resolve(n) in header.channels for n in names)
+
+
+def _on_time(header, name: str) -> bool:
+    """Whether channel *name* is a column index landing on *header*'s time or rate column (a WAV run's '0' on a CSV's
+    'time_s')."""
+    index = str(name).strip()
+    return name not in header.channels and index.isdigit() and is_rate_or_time(header.channels[int(index)])
 
 
 def _ratio(shaft) -> list[int]:
