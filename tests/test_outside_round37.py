@@ -239,3 +239,15 @@ def test_score_of_a_csv_on_a_wav_run_asks_for_its_channels_not_its_time_column(t
         remembered(meta, str(take))
     assert "the run's no files'" not in str(refused.value), refused.value  # every file read with the [target]'s
     assert remembered(meta, str(take), {"vibration": "acc_V", "tacho": "tacho_V"})[0] == {}
+
+
+def test_a_gain_given_every_file_on_a_file_in_volts_says_how_to_drop_it(tmp_path):
+    # the same CSV scored with --key vibration=acc_V --key tacho=tacho_V: the run's gain = '5 V' (its WAVs' full
+    # scale) refused on the volts column with 'expected no gain (an amplifier's gain goes in the sensitivity ...)',
+    # no word of --key gain=, as the line for a file in m/s² says it
+    from gearlab.data.recordings import read_recording
+    from gearlab.errors import GearlabInputError
+
+    take = _csv_of_wav_take(tmp_path / "next.csv")
+    with pytest.raises(GearlabInputError, match='gain = "" in this file\'s entry; gearlab score: --key gain='):
+        read_recording(take, "acc_V", "tacho_V", sensitivity=0.1 / G, gain=5.0)

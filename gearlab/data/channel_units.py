@@ -245,6 +245,12 @@ def _cased(value) -> str:
     return f" (did you mean {meant!r}? a unit's symbol is case-sensitive)" if meant else ""
 
 
+def _dropped(key: str) -> str:
+    """How a key given for every file (a scenario's [target], a run's keys for gearlab score) is dropped for one file:
+    said where a file's own unit refuses it, or the user is stuck (a WAV run's full-scale gain on a CSV in volts)."""
+    return f'to drop one given for every file: {key} = "" in this file\'s entry; gearlab score: --key {key}='
+
+
 def channel_scale(
     name: str,
     sensitivity: float | None,
@@ -304,7 +310,7 @@ def channel_scale(
         # the sensitivity was to be multiplied, a level 100 x off, unsaid
         raise GearlabInputError(
             f"{at('gain')}: channel '{name}' is in volts already ({said[1]}, {says}); expected no gain (an "
-            "amplifier's gain goes in the sensitivity: 100 mV/g at x10 is sensitivity = '1 V/g')"
+            f"amplifier's gain goes in the sensitivity: 100 mV/g at x10 is sensitivity = '1 V/g'; {_dropped('gain')})"
         )
     if said is None and isinstance(gain, BareGain) and not integer and sensitivity is not None:
         raise GearlabInputError(
@@ -325,8 +331,7 @@ def channel_scale(
                 # one file by giving it empty: say how, or the user is stuck (an npz in m/s² scored on a volts run)
                 raise GearlabInputError(
                     f"{at(key)}: channel '{name}' is an acceleration already ({said[1]}, {says}); expected no {key} "
-                    f'(to drop one given for every file: {key} = "" in this file\'s entry; '
-                    f"gearlab score: --key {key}=)"
+                    f"({_dropped(key)})"
                 )
         if said[2] == 1.0:
             return 1.0, f"m/s² (channel '{name}')"
