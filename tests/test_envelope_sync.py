@@ -131,6 +131,20 @@ def test_a_take_s_kurtosis_is_its_envelope_s_in_every_band_and_its_band_s_histor
     assert E.SELECTED in found["method"] and len(read) == 1 + len(candidates), found["method"]
 
 
+def test_a_take_s_kurtosis_in_the_whole_residual_is_read_without_its_envelope_s_low_pass(box, monkeypatch):
+    """The whole residual's kurtosis needs its squared envelope's two means alone: _kurtosis makes no low-pass of it
+    (an rfft and an irfft of the record's length, half of that band's cost), and reads the same value as _band."""
+    table, _ = box
+    spec = E._spectrum(W.Take(*take(SEED_WEAK, Strike("output", 0.55, 0.3))).revolutions, table)
+    candidates = E.bands(0.45 * spec[2])
+    whole = E._band(*spec, candidates[0])[1]
+    made, real = [], E.rfft
+    monkeypatch.setattr(E, "rfft", lambda x: made.append(np.size(x)) or real(x))
+    assert E._kurtosis(*spec, candidates)[0] == whole
+    assert made == []  # before: one, of the record's kept revolutions' length
+    assert np.shape(E._band(*spec, candidates[0])[0]) == (spec[3][1] - spec[3][0], E.POINTS) and len(made) == 1
+
+
 def test_a_synchronous_fault_is_named_as_before(box):
     """A chipped 24T pinion of the simulated 21/63 + 24/56 reducer: the synchronous averages name it, and the
     envelope changes nothing of what they say."""

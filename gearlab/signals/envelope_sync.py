@@ -202,6 +202,19 @@ def _band(X: np.ndarray, count: int, points: int, kept: tuple[int, int], band) -
     """(the squared envelope (b - a, POINTS) over its mean of the residual of spectrum *X* in *band* (input orders
     [lo, hi); hi past the spectrum's half: the whole residual), in the revolutions *kept* [a, b) alone, its spectral
     kurtosis there (_kurtosis))."""
+    e, wide, kurt = _squared(X, count, points, kept, band)
+    a, b = kept
+    if not wide:
+        return (e / e.mean()).reshape(b - a, POINTS), kurt
+    E = rfft(e / e.mean())[: (b - a) * POINTS // 2 + 1]  # low-passed to POINTS / 2 orders
+    return np.fft.irfft(E, n=(b - a) * POINTS).reshape(b - a, POINTS) * (POINTS / points), kurt
+
+
+def _squared(X: np.ndarray, count: int, points: int, kept: tuple[int, int], band) -> tuple[np.ndarray, bool, float]:
+    """_band's squared envelope in the revolutions *kept*, not yet over its mean nor low-passed, whether the band is
+    wide (read at *points* a turn, to be low-passed; else shifted down, at POINTS), its spectral kurtosis over the
+    whole record: all that _kurtosis reads of a band it cannot read in its own transforms (the whole residual: half
+    the cost of its _band, whose low-pass is two more transforms of the record's length)."""
     lo, hi = band
     n = X.size
     a, b = kept
@@ -221,10 +234,7 @@ def _band(X: np.ndarray, count: int, points: int, kept: tuple[int, int], band) -
     e = e[a * step : b * step]  # the envelope is read in the kept revolutions, the kurtosis over the whole record
     if not e.mean() > 0:
         raise GearlabInputError(f"envelope: no residual in input orders {lo:g}-{hi:g}; expected a signal")
-    if not wide:
-        return (e / e.mean()).reshape(b - a, POINTS), kurt
-    E = rfft(e / e.mean())[: (b - a) * POINTS // 2 + 1]  # low-passed to POINTS / 2 orders
-    return np.fft.irfft(E, n=(b - a) * POINTS).reshape(b - a, POINTS) * (POINTS / points), kurt
+    return e, wide, kurt
 
 
 def _normalised(kurt: float, bins: np.ndarray) -> float:
@@ -249,7 +259,7 @@ def _kurtosis(X: np.ndarray, count: int, points: int, kept: tuple[int, int], can
         first, stop, wide = _bins(n, count, band)
         lo, hi = band
         if wide and n % 2 == 0 and hi * count > n / 2:  # the half's bin in it (the whole residual): as _band
-            out[i] = _band(X, count, points, kept, band)[1]
+            out[i] = _squared(X, count, points, kept, band)[2]
             continue
         # a wide band from order 0 holds the DC at half the weight of its other bins (_band's analytic signal)
         held = np.concatenate([X[:1], 2 * X[first:stop]]) if wide and lo <= 0 else X[first:stop]
