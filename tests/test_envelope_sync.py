@@ -145,6 +145,21 @@ def test_a_take_s_kurtosis_in_the_whole_residual_is_read_without_its_envelope_s_
     assert np.shape(E._band(*spec, candidates[0])[0]) == (spec[3][1] - spec[3][0], E.POINTS) and len(made) == 1
 
 
+def test_a_history_record_s_whole_residual_envelope_is_made_once_for_its_kurtosis_and_its_band(box, monkeypatch):
+    """A history reads every record's whole-residual envelope (its first band, read at once) and that band's
+    kurtosis: one squared envelope a record serves both, and the bank is the one each band's own _band reads."""
+    table, _ = box
+    records = [W.Take(*take(seed)).revolutions for seed in (1, 2)]
+    made, real = [], E._squared
+    monkeypatch.setattr(E, "_squared", lambda *a: made.append(a[-1]) or real(*a))
+    bank = E.history(records, table)
+    assert sum(1 for band in made if np.isinf(band[1])) == len(records)  # before: two a record
+    specs = [E._spectrum(r, table) for r in records]
+    kurt = np.mean([[E._band(*s, b)[1] for b in bank.candidates] for s in specs], axis=0)
+    np.testing.assert_allclose(bank.kurtosis, kurt, rtol=1e-9, atol=1e-12)
+    assert bank.kurtosis[0] == np.mean([E._band(*s, bank.candidates[0])[1] for s in specs])
+
+
 def test_a_synchronous_fault_is_named_as_before(box):
     """A chipped 24T pinion of the simulated 21/63 + 24/56 reducer: the synchronous averages name it, and the
     envelope changes nothing of what they say."""

@@ -245,17 +245,23 @@ def _normalised(kurt: float, bins: np.ndarray) -> float:
     return float(kurt * np.sqrt(2 * p.sum() ** 2 / (p**2).sum()) / 2)
 
 
-def _kurtosis(X: np.ndarray, count: int, points: int, kept: tuple[int, int], candidates: np.ndarray) -> np.ndarray:
+def _kurtosis(
+    X: np.ndarray, count: int, points: int, kept: tuple[int, int], candidates: np.ndarray, read: Mapping | None = None
+) -> np.ndarray:
     """_band's spectral kurtosis of the residual of spectrum *X* in each band of *candidates*, its squared envelope
     read at the fewest points that hold it whole (twice the band's bins: the mean of the envelope and of its square
     are there what they are at POINTS a turn, or at the record's length, to round-off), the bands of one length in one
-    transform: a take reads its kurtosis in every band, its envelope in one."""
+    transform: a take reads its kurtosis in every band, its envelope in one. *read*: {candidate index: its kurtosis}
+    of the bands the caller read with _band already (history(): the whole residual's, whose envelope it reads)."""
     from scipy.fft import next_fast_len
 
     n = X.size
     out = np.empty(len(candidates))
     rows: dict[int, list] = {}
     for i, band in enumerate(candidates):
+        if read and i in read:
+            out[i] = read[i]
+            continue
         first, stop, wide = _bins(n, count, band)
         lo, hi = band
         if wide and n % 2 == 0 and hi * count > n / 2:  # the half's bin in it (the whole residual): as _band
@@ -355,14 +361,16 @@ def history(records: list[np.ndarray], table, top: float | None = None, **option
     lo, hi = ORDERS
     candidates = bands(0.45 * np.shape(records[0])[-1] if top is None else top)
     specs = [_spectrum(r, table) for r in records]
-    kurt = np.mean([_kurtosis(*s, candidates) for s in specs], axis=0)
+    # the whole residual's envelope, read below (hists[0]) and its kurtosis with it: each record's envelope once
+    whole = [_band(*s, candidates[0]) for s in specs]
+    kurt = np.mean([_kurtosis(*s, candidates, {0: w[1]}) for s, w in zip(specs, whole)], axis=0)
     firsts = options.pop("first_revolutions", None) or [0] * len(records)
     options["first_revolutions"] = [f + s[3][0] for f, s in zip(firsts, specs)]  # each envelope's first revolution
 
     def read(indices: list[int]) -> list[L.History]:
         return [
             L.history(
-                [_band(*s, candidates[i])[0] for s in specs],
+                [w[0] if i == 0 else _band(*s, candidates[i])[0] for s, w in zip(specs, whole)],
                 table,
                 min_order=lo,
                 max_order=hi,
