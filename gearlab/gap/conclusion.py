@@ -17,6 +17,7 @@ from ..data.chain import Chain, fit_offset
 from ..data.spec import DatasetSpec
 from ..events import Event
 from ..registry import get_registry
+from .line_levels import mismatch_of, told, told_text
 from .scoring import NUISANCE, Settings, _clean_revolution, _report
 
 if TYPE_CHECKING:  # the annotation only
@@ -62,6 +63,8 @@ def verdict_text(result: dict) -> str:
         return f"{verdict_text({**result, 'structure': None})}; {ambiguous['line']}"
     if verdict == "partly explained" and result.get("explained_share") is not None:
         return f"partly explained ({100 * result['explained_share']:.0f} % of the gap)"
+    if verdict == "unexplained" and result.get("lines_differ"):  # no effect can be told on this box (line_levels)
+        return f"unexplained: {told_text(result['lines_differ'])}"
     if verdict == "explained" and result.get("within_noise") and result.get("significant_after"):
         # the test still tells the sets apart; what is left lies within the rows' own scatter
         return f"explained (what is left within the noise: RMS effect {result['rms_effect_after']:.2f})"
@@ -139,6 +142,8 @@ def conclusion(run: _Run, result: dict, before: dict, accepted: list[dict], fitt
         seconds=time.perf_counter() - started,
         profile_seconds=dict(run.profile_seconds),
     )
+    if verdict == "unexplained" and told(record := mismatch_of(run, result)):
+        result["lines_differ"] = record  # the box's own lines differ as much as an effect moves them (line_levels)
     # A gap the test sees whose whole RMS effect lies within the noise width: no effect can be credited
     # with removing more than the width (within_noise), so none is named -- the gap is below what the
     # diagnosis attributes, which is not the same as an effect outside the library (a 160 um

@@ -186,6 +186,9 @@ def gap_lines(summary: Mapping) -> list[str]:
                 f"Effects {summary['dropped']}: stand-ins for an effect outside the library; the simulator is "
                 "left uncorrected."
             )
+        if said.startswith("unexplained: "):  # why no effect can be told on this box (gearlab.gap.line_levels)
+            why = said.removeprefix("unexplained: ")
+            lines.append(f"{why[0].upper()}{why[1:]}.")
     lines += _not_accepted(summary)
     lines += _unchecked(summary)  # the verdict holds for the structure as far as it was checked
     level = (summary.get("structure") or {}).get("level") or {}
