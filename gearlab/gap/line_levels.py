@@ -6,11 +6,11 @@ changed relative to each other: a 2-pole low-pass at 3 kHz lowers the 8 harmonic
 3.8 dB RMS around their mean. On a box that gearlab's simulator does not make (a 27/61 + 22/53 box whose
 lines a plain numpy generator drew), the plain box's harmonics already differ from the simulator's by 7.7 dB
 RMS harmonic to harmonic, up and down with no smooth shape: a candidate is then fitted against that mismatch
-as much as against the effect. The plain box's best stand-in, a resonance at 4.6 kHz, removed 49-50 % of its
-gap; behind the low-pass, the low-pass came back at 4.5 kHz with 5-8 poles and removed 2 % beyond the noise
-alone on fresh revolutions: no rule on the shares tells the effect from the box, and none is named. The
-verdict says so with the numbers: the records' lines against the plain simulator's, and beside the fit that
-matches them best (:func:`line_mismatch`)."""
+as much as against the effect. The plain box's best stand-in, a resonance at 4.6 kHz, removed 48-50 % of its
+gap; behind the low-pass (3 kHz, 2 poles), the low-pass came back at 4.5 kHz with 5-8 poles on two of three
+development sets and removed 2 % beyond the noise alone on fresh revolutions: no rule on the shares tells the
+effect from the box, and none is named. The verdict says so with the numbers: the records' lines against the
+plain simulator's, and beside the fit that matches them best (:func:`line_mismatch`)."""
 
 from __future__ import annotations
 
