@@ -251,3 +251,16 @@ def test_a_gain_given_every_file_on_a_file_in_volts_says_how_to_drop_it(tmp_path
     take = _csv_of_wav_take(tmp_path / "next.csv")
     with pytest.raises(GearlabInputError, match='gain = "" in this file\'s entry; gearlab score: --key gain='):
         read_recording(take, "acc_V", "tacho_V", sensitivity=0.1 / G, gain=5.0)
+
+
+def test_c_a_dataset_whose_columns_are_all_named_is_listed_by_those_names_alone(cli, box_c):
+    # C's (N, 3) 'data' named acc_in, acc_out, tacho by its attribute was listed as a channel of its own ('which
+    # channel is the vibration? the file has data, acc_in, acc_out, tacho'), and '--vibration data' was refused
+    from gearlab.data.readers.headers import HEADERS
+
+    where, _ = box_c
+    code, out, err = cli("inspect", where / "take.h5", "--gearbox", where / "boxC.toml")
+    assert code == 2 and "the file has acc_in, acc_out, tacho; expected --vibration NAME" in err, err
+    header = HEADERS["HDF5"](where / "take.h5")
+    assert header.channels == ["acc_in", "acc_out", "tacho"], header.channels  # validate's listing
+    assert header.find("data[1]") and not header.find("data[3]")  # a column by its index is still read

@@ -89,7 +89,8 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
     with h5py.File(path, "r") as f:
         datasets = _hdf5_datasets(h5py, f)
         columns = named_columns(f, datasets)
-        contents = Contents({}, datasets + [n for n in columns if n not in datasets])
+        whole = named_matrices({d: f[d].shape for d in datasets}, columns)
+        contents = Contents({}, [d for d in datasets if d not in whole] + [n for n in columns if n not in datasets])
         seen: set[str] = set()
         own: dict[str, tuple] = {}  # each channel's one rate field, where it has one
         at: dict[str, str] = {}  # each channel's dataset path
@@ -158,6 +159,15 @@ def named_columns(f, datasets: Sequence[str]) -> dict[str, tuple[str, int, str |
             if name and name not in datasets:
                 out[name] = None if name in out else (d, i, units[i] or None)
     return {n: c for n, c in out.items() if c is not None}
+
+
+def named_matrices(shapes: dict[str, tuple], columns: dict[str, tuple[str, int, str | None]]) -> set[str]:
+    """The 2-D datasets (of *shapes*) each column of which a name reaches (*columns*: named_columns): listed by those
+    names alone, as 'data' of acc_in, acc_out, tacho is no channel of its own (its 'data[1]' is still read)."""
+    reached: dict[str, set[int]] = {}
+    for matrix, i, _ in columns.values():
+        reached.setdefault(matrix, set()).add(i)
+    return {d for d, got in reached.items() if len(got) == min(shapes[d])}
 
 
 def _texts(value, k: int) -> list[str] | None:

@@ -95,7 +95,7 @@ class Header:
     def find(self, name: str) -> bool:
         if name in self.channels or self.resolve(name) in self.channels:
             return True
-        if (column := matrix_column(name)) is not None and self.find(column[0]):
+        if (column := matrix_column(name)) is not None and (self.find(column[0]) or column[0] in self.shapes):
             return self.not_a_column(name) is None
         return self.indexed and str(name).strip().isdigit() and int(name) < len(self.channels)
 
@@ -329,7 +329,7 @@ def _npz_header(path: Path) -> Header:
 
 def _hdf5_header(path: Path, fmt: str = "HDF5") -> Header:
     from .base import stated_unit
-    from .hdf5 import _h5py, _hdf5_datasets, named_columns, text_units
+    from .hdf5 import _h5py, _hdf5_datasets, named_columns, named_matrices, text_units
 
     h5py = _h5py()
     with h5py.File(path, "r") as f:
@@ -353,7 +353,9 @@ def _hdf5_header(path: Path, fmt: str = "HDF5") -> Header:
                     stated = stated or (hz, f"attribute {k!r} of {n!r}")  # in Hz, a unit in its name read
         shapes = {n: tuple(f[n].shape) for n in names}
         stated = stated or _rate_variable(shapes, lambda n: f[n][()])
-        for name, (matrix, i, unit) in named_columns(f, names).items():  # a DAQ's (N, k) 'data' names its columns
+        columns = named_columns(f, names)
+        names = [n for n in names if n not in named_matrices(shapes, columns)]  # its shape kept: 'data[1]' found
+        for name, (matrix, i, unit) in columns.items():  # a DAQ's (N, k) 'data' names its columns
             names.append(name)
             shapes[name] = (max(shapes[matrix]),)
             units.update({name: unit, f"{matrix}[{i}]": unit} if unit else {})
