@@ -264,3 +264,22 @@ def test_c_a_dataset_whose_columns_are_all_named_is_listed_by_those_names_alone(
     header = HEADERS["HDF5"](where / "take.h5")
     assert header.channels == ["acc_in", "acc_out", "tacho"], header.channels  # validate's listing
     assert header.find("data[1]") and not header.find("data[3]")  # a column by its index is still read
+
+
+@pytest.mark.parametrize("names", ["acc_in,acc_out,tacho", "acc_in; acc_out; tacho", b"acc_in, acc_out, tacho"])
+def test_column_names_stored_as_one_separated_text_name_each_column(tmp_path, names):
+    # channel_names written as ONE text "acc_in,acc_out,tacho" (a common export) was no list of 3: the file was read
+    # as one channel 'data', with no word of 'data[1]'
+    from gearlab.data.readers.headers import HEADERS
+    from gearlab.data.recordings import read_recording
+
+    a, shafts, _ = _take(C, 45.0, 12800.0, 0.5, seed=7)
+    with h5py.File(tmp_path / "take.h5", "w") as f:
+        data = f.create_dataset("data", data=np.stack([a / G, a / G / 2, _pulses(shafts[1])], axis=1))
+        data.attrs["channel_names"] = names
+        data.attrs["units"] = "g,g,V"
+        f.attrs["fs"] = 12800.0
+    rec = read_recording(tmp_path / "take.h5", "acc_out", "tacho")
+    assert rec.channels == ["acc_in", "acc_out", "tacho"], rec.channels
+    assert np.allclose(rec.signal, a / 2), rec.units  # in g, as its unit says: m/s²
+    assert HEADERS["HDF5"](tmp_path / "take.h5").channels == ["acc_in", "acc_out", "tacho"]

@@ -4,6 +4,7 @@ group above that has one, or an 'fs'/'t' dataset there."""
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -171,9 +172,15 @@ def named_matrices(shapes: dict[str, tuple], columns: dict[str, tuple[str, int, 
 
 
 def _texts(value, k: int) -> list[str] | None:
-    """*value*, an attribute, as k texts, or None where it is not k texts."""
+    """*value*, an attribute, as k texts, or None where it is not k texts: k strings, or one of k separated by commas
+    or semicolons, as a DAQ's export writes channel_names = "acc_in,acc_out,tacho" (read as one channel 'data')."""
     arr = np.asarray(value).ravel()
-    return _text_array(arr).tolist() if arr.size == k and arr.dtype.kind in "SUO" else None
+    if arr.dtype.kind not in "SUO":
+        return None
+    texts = _text_array(arr).tolist()
+    if len(texts) == 1 and k > 1:
+        texts = [t.strip() for t in re.split("[,;]", texts[0])]
+    return texts if len(texts) == k else None
 
 
 def text_units(h5py, f, channels: dict[str, str], datasets: Sequence[str]) -> tuple[dict[str, str], set[str]]:
