@@ -786,8 +786,10 @@ def localise(revolutions: np.ndarray, hist: History, table, first_revolution: in
     ranking = tuple(sorted(out, key=lambda e: -e.z))
     top = next((e for e in ranking if e.flagged), None)
     method = lay.note + "; " + hist.note
-    if hist.marks > 1:
+    if hist.marks > 1:  # turned's m: the record cut again m/marks of an input turn later
+        cut = f"were cut {m}/{hist.marks} of a turn later to line up with" if m else "already line up with"
         method += (
-            f"; teeth counted from the first history record's tacho mark (this record advanced {m}/{hist.marks} turn)"
+            f"; teeth counted from the first history record's tacho mark (the mark falls at any of {hist.marks} "
+            f"points of an input turn: this record's input revolutions {cut} that record's)"
         )
     return Localisation(method, ranking, None if top is None else top.gear, None if top is None else top.shaft)
