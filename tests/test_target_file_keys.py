@@ -216,3 +216,21 @@ def test_score_reads_a_file_of_a_new_format_with_the_keys_whose_channels_it_has(
     given = {"vibration": "accel_V", "tacho": "probe_V"}
     keys = reading_keys(meta, None, given, str(tmp_path / "other.mat"))
     assert (keys["vibration"], keys["tacho"], keys["gain"]) == ("accel_V", "probe_V", None)  # not the WAVs' gain
+
+
+def test_the_gap_s_target_line_says_how_each_record_s_speed_was_found_with_a_count(tmp_path):
+    """Three history records, two of one declared speed: the target line listed two speeds for three records (two
+    texts alike, said once); each text now says how many records it stands for."""
+    from gearlab.kinds.gap_inputs import Records, read_history
+
+    _takes(tmp_path)
+    for i in (2, 3):
+        (tmp_path / f"h{i}.csv").write_text((tmp_path / "h.csv").read_text())
+    speeds = {"h.csv": "25 Hz", "h2.csv": "25.1 Hz", "h3.csv": "25 Hz"}
+    files = [{"file": f, "role": "history", "label": "healthy", "speed": s} for f, s in speeds.items()]
+    target = target_spec(_target_table(files), "g.toml: [target]", tmp_path, need=("history",))
+    _, _, notes, *_ = read_history(Records("g", target), lambda e: None)
+    line = next(n for n in notes if n.startswith("target: "))
+    assert "of 3 history record(s) at 25.033 Hz (2 records: nominal speed 25 Hz; 1 record: nominal speed 25.1 Hz)" in (
+        line
+    )

@@ -5,6 +5,7 @@ revolutions, a rate that resolves the mesh harmonics, and what is said when thei
 
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
@@ -106,8 +107,10 @@ def read_history(
         notes.append(f"{skipped} test file(s) of the [target] are not used: the gap is measured on the history")
     X = np.concatenate(rows).astype(np.float64)
     speed = float(np.average(list(speeds.values()), weights=[len(r) for r in rows]))
-    # how the speed was found: the tacho, a declared speed, or the description's mesh lines (each its own)
-    how = "; ".join(dict.fromkeys(found.values()))
+    # how the speed was found: the tacho, a declared speed, or the description's mesh lines (each its own), a text
+    # of several records said once with their count (3 records' line listed 2 speeds where two texts were alike)
+    counts = Counter(found.values())
+    how = "; ".join(f"{n} record{'s' * (n > 1)}: {h}" if len(files) > 1 else h for h, n in counts.items())
     from_mesh = t.tacho is None and bool(t.gearbox) and t.speed_hz is None and all(f.speed_hz is None for f in files)
     said = mesh_speed_note(speed, *described) if from_mesh else "the source simulates that speed"
     notes.append(f"target: {len(X)} revolutions of {len(files)} history record(s) at {speed:.3f} Hz ({how}); {said}")
