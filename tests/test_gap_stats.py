@@ -272,6 +272,10 @@ def test_output_shaft_orders_from_consecutive_revolutions():
     assert "output_shaft" not in plain and any("orders of the output shaft" in note for note in plain["notes"])
     assert plain["significant"]
     json.dumps(report, allow_nan=False)
+    # too few source rows for 10 blocks: the note says which set is short, and where its count is set
+    short = gap_report(record(0.0, 1)[:40], record(0.05, 2), (Z1, Z2), consecutive=True, **FAST)
+    said = "got 6 blocks (the source's 40: [diagnosis] healthy; the target's 120: its records together)"
+    assert short["output_shaft"] is None and any(said in note for note in short["notes"]), short["notes"]
 
 
 def test_noise_free_source_stays_finite_and_is_flagged():

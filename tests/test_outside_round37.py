@@ -283,3 +283,22 @@ def test_column_names_stored_as_one_separated_text_name_each_column(tmp_path, na
     assert rec.channels == ["acc_in", "acc_out", "tacho"], rec.channels
     assert np.allclose(rec.signal, a / 2), rec.units  # in g, as its unit says: m/s²
     assert HEADERS["HDF5"](tmp_path / "take.h5").channels == ["acc_in", "acc_out", "tacho"]
+
+
+GAP = '[scenario]\nname = "g"\nkind = "gap"\n[source]\ngearbox = "{box}"\n[target]\nvibration = "acc"\n'
+GAP += 'files = [{{ file = "take.mat", role = "history", label = "healthy" }}]\n'
+
+
+def test_validate_says_a_gap_history_too_short_for_the_orders_of_stage_1_s_wheel_shaft(cli, box_a):
+    # A's gap run on 12 s takes ended with a note alone: 'orders of the intermediate shaft ... need 10 blocks of 59
+    # consecutive revolutions per set (590 revolutions); got 0 blocks', nowhere said before recording
+    where, _ = box_a
+    (where / "gap.toml").write_text(GAP.format(box="boxA.toml"))
+    code, out, err = cli("validate", where / "gap.toml")
+    assert code == 0 and "OK" in out, err
+    said = "the report's orders of the intermediate shaft (stage 1's 59-tooth wheel, 0.3898 input orders) need 590 "
+    assert said in err and "record(s) hold ~350 (their headers' lengths at 29.17 Hz: 20.3 s in all needed)" in err
+    (where / "boxA_29.toml").write_text(BOX_A.replace("z = 23", "z = 29").replace("z = 59", "z = 58"))
+    (where / "gap.toml").write_text(GAP.format(box="boxA_29.toml"))
+    code, out, err = cli("validate", where / "gap.toml")
+    assert code == 0 and "consecutive input revolutions" not in err, err  # 29/58: blocks of 2, 20 revolutions

@@ -486,7 +486,8 @@ def _output_shaft(Xs, Xt, pair, plan, bootstrap, seed, confidence, top, notes, s
     if blocks < MIN_REVOLUTIONS:
         notes.append(
             f"orders of the {shaft} need {MIN_REVOLUTIONS} blocks of {per_block} consecutive revolutions "
-            f"per set ({MIN_REVOLUTIONS * per_block} revolutions); got {blocks} blocks"
+            f"per set ({MIN_REVOLUTIONS * per_block} revolutions); got {blocks} blocks (the source's {len(Xs)}: "
+            f"[diagnosis] healthy; the target's {len(Xt)}: its records together)"
         )
         return None
     vs, vt = output_shaft_view(Xs, pair, plan), output_shaft_view(Xt, pair, plan)

@@ -41,7 +41,7 @@ from ..learn.protocol import Counts, Method, Protocol, check, check_data, domain
 from ..learn.schedule import two_phases
 from ..parts import training
 from ..parts.bound import bayes_bound
-from ..parts.measured import pattern_counts, target_spec
+from ..parts.measured import pattern_counts
 from ..parts.training import TRAINING, train_unit
 from ..registry import get_registry
 from ..runs import RunDir
@@ -50,10 +50,8 @@ from ..settings import setting, shrunk, typed
 from .common import (
     DATASET_TABLE,
     class_sizes,
-    dataset_spec,
     device_of,
     executor_for,
-    gearbox_name,
     no_compare,
     no_title,
     planned_counts,
@@ -68,6 +66,8 @@ from .gap_inputs import (  # noqa: F401 (unit_modules: the kind contract's)
     check_points,
     check_sampling,
     read_history,
+    short_history,
+    target_of,
     unit_modules,
     units_declared,
     units_warning,
@@ -152,6 +152,7 @@ def build(scenario: Scenario) -> Spec:
         healthy = class_sizes(target)["healthy"]
         check_healthy(healthy, location(path, "target", "healthy"))
     d = typed(Settings, t["diagnosis"])
+    short_history(target, source, pair, location(path, "target", "files"))  # warned: a view it leaves out
     settings = replace(d, candidates=candidates(d.candidates, location(path, "diagnosis", "candidates")))
     if settings.reference == "noise" and settings.candidates and "sensor_noise" not in settings.candidates:
         raise GearlabInputError(
@@ -192,30 +193,6 @@ def build(scenario: Scenario) -> Spec:
         if None not in planned and planned[1].faults:
             check_data(protocol, *planned, f"{path}: [accuracy]")
     return Spec(source, target, settings, protocol, bool(a["enabled"]))
-
-
-def target_of(entry: dict, where: str, base, box=None) -> DatasetSpec | MeasuredSpec | Records:
-    """The [target]: measured records ('files'; *box*: their tacho's shafts), or a dataset entry (a preset, 'file')."""
-    if not entry["files"]:
-        if entry["pulses_per_rev"] not in (None, 1):
-            raise GearlabInputError(f"{where} key 'pulses_per_rev': belongs to measured records ('files')")
-        for key in ("vibration", "tacho"):
-            if not isinstance(entry[key], str):
-                raise GearlabInputError(
-                    f"{where} key '{key}': a column index belongs to measured records "
-                    f"('files'); a 'file' names its channel as text (a WAV's channels are named "
-                    f'"0", "1", ...): expected e.g. {key} = "{entry[key]}"'
-                )
-        return dataset_spec(entry, where, base)
-    for key in ("preset", "file"):
-        if entry[key]:
-            raise GearlabInputError(f"{where}: give either 'files' (measured records) or '{key}', not both")
-    # without a tacho, a declared 'speed' or the 'gearbox' description's mesh orders give each record's
-    # speed (parts.measured.target_spec refuses none of the three; the description resolved and loaded now)
-    if entry["gearbox"]:
-        entry = {**entry, "gearbox": gearbox_name(entry["gearbox"], f"{where} key 'gearbox'", base)}
-    target = target_spec({**entry, "positive": "fault"}, where, base, need=("history",), box=box)
-    return Records(entry["name"] or "measured records", target, units_declared(target), where)
 
 
 def candidates(names, where: str) -> tuple[str, ...]:

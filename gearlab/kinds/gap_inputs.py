@@ -10,11 +10,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..data.importers import MeasuredSpec
 from ..data.spec import DatasetSpec
 from ..errors import GearlabInputError
 from ..events import Event
-from ..parts.measured import Target
-from .common import FITS, SPEED_GROUP, TRAINS, DatasetEntry, measured, unconfirmed_speed
+from ..parts.measured import Target, target_spec
+from .common import FITS, SPEED_GROUP, TRAINS, DatasetEntry, dataset_spec, gearbox_name, measured, unconfirmed_speed
 
 # The gap statistics need at least this many healthy revolutions per side (gearlab.gap.stats).
 MIN_HEALTHY = 10
@@ -46,6 +47,30 @@ class Records:
     @property
     def history(self):
         return tuple(f for f in self.target.files if f.role == "history")
+
+
+def target_of(entry: dict, where: str, base, box=None) -> DatasetSpec | MeasuredSpec | Records:
+    """The [target]: measured records ('files'; *box*: their tacho's shafts), or a dataset entry (a preset, 'file')."""
+    if not entry["files"]:
+        if entry["pulses_per_rev"] not in (None, 1):
+            raise GearlabInputError(f"{where} key 'pulses_per_rev': belongs to measured records ('files')")
+        for key in ("vibration", "tacho"):
+            if not isinstance(entry[key], str):
+                raise GearlabInputError(
+                    f"{where} key '{key}': a column index belongs to measured records "
+                    f"('files'); a 'file' names its channel as text (a WAV's channels are named "
+                    f'"0", "1", ...): expected e.g. {key} = "{entry[key]}"'
+                )
+        return dataset_spec(entry, where, base)
+    for key in ("preset", "file"):
+        if entry[key]:
+            raise GearlabInputError(f"{where}: give either 'files' (measured records) or '{key}', not both")
+    # without a tacho, a declared 'speed' or the 'gearbox' description's mesh orders give each record's
+    # speed (parts.measured.target_spec refuses none of the three; the description resolved and loaded now)
+    if entry["gearbox"]:
+        entry = {**entry, "gearbox": gearbox_name(entry["gearbox"], f"{where} key 'gearbox'", base)}
+    target = target_spec({**entry, "positive": "fault"}, where, base, need=("history",), box=box)
+    return Records(entry["name"] or "measured records", target, units_declared(target), where)
 
 
 def read_history(
@@ -181,6 +206,43 @@ def check_healthy(count: int, where: str) -> None:
         raise GearlabInputError(
             f"{where}: too few healthy target revolutions for the gap statistics: {count}; "
             f"expected at least {MIN_HEALTHY}"
+        )
+
+
+def short_history(target, source: DatasetSpec, pair, where: str) -> None:
+    """Warn (gearlab validate, a run's start) where the history's records are too short together for the report to
+    resolve the orders of stage 1's wheel shaft: MIN_REVOLUTIONS blocks of Z2/gcd(Z1, Z2) consecutive input
+    revolutions a set (gap.stats._output_shaft; the source's set is [diagnosis] healthy's), as long as every header
+    gives its record's length (a WAV, an HDF5, npz or MAT array with its rate), at its declared speed, else the
+    description's. The diagnosis runs without that view, said in a note (a 23/59 stage: 590 revolutions)."""
+    import math
+    import warnings
+
+    from ..data.recordings import read_header
+    from ..gap.stats import MIN_REVOLUTIONS
+    from ..gap.structure_later import wheel_shaft
+    from ..gearbox.simulation import gearbox_of
+
+    if not isinstance(target, Records):
+        return
+    per_block = pair.Z2 // math.gcd(pair.Z1, pair.Z2)
+    need, t, box = MIN_REVOLUTIONS * per_block, target.target, gearbox_of(source)
+    turns, nominal = 0.0, source.speed_hz or (box.speed_hz if box is not None else None)
+    for f in target.history:
+        keys = t.keys_of(f)
+        speed = (f.speed_hz or t.speed_hz if keys.get("tacho") is None else None) or nominal
+        seconds = read_header(f.resolved).seconds(str(keys["vibration"]), keys["fs"])
+        if seconds is None or not speed:
+            return  # a text file's length: the run's note says it
+        turns += seconds * speed
+    if turns < need:
+        warnings.warn(
+            f"{where}: the report's orders of the {wheel_shaft(pair)} need {need} consecutive input revolutions a "
+            f"set ({MIN_REVOLUTIONS} blocks of Z2/gcd(Z1, Z2) = {per_block}; the source's set: [diagnosis] healthy); "
+            f"the history's {len(target.history)} record(s) hold ~{int(turns)} (their headers' lengths at "
+            f"{speed:.4g} Hz: {math.ceil(10 * need / speed) / 10:g} s in all needed): the report leaves those orders "
+            "out",
+            stacklevel=2,
         )
 
 
