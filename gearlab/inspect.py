@@ -70,6 +70,7 @@ from .gearbox.speed import (
     follow_speed,
     mesh_angle,
     nominal_line,
+    settling,
 )
 from .gearbox.speed_course import speed_course, speed_shift
 from .inspect_axes import stronger_axis
@@ -166,6 +167,7 @@ class Speed:
     notes: list[str] = field(default_factory=list)
     settled: str = ""  # what replaced a declared speed the mesh lines do not confirm (the input pinion's sidebands)
     others: list = field(default_factory=list)  # [(z, Hz)]: other pinion counts the mesh line allows (no tacho)
+    ends: float = 0.0  # s at either end a take's revolutions leave out: a followed angle's unsettled (settling)
 
     def describe(self) -> dict:
         s = self.per_revolution_hz
@@ -228,7 +230,7 @@ def _found_speed(rec: Recording, box: Gearbox | None, options: InspectOptions) -
         speed = Speed(f, how, *_along_course(rec, f), declared)
     else:
         starts = revolution_starts(theta - theta[0])
-        speed = Speed(f, how, theta, rec.fs / np.diff(starts), declared)
+        speed = Speed(f, how, theta, rec.fs / np.diff(starts), declared, ends=settling(box, f))
     if note:
         speed.notes.append(note)
     if (shift := speed_shift(rec.signal, rec.fs)) is not None:  # a run-up smears every line at any one speed

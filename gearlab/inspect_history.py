@@ -32,7 +32,7 @@ from .signals import POINTS, resample_revolutions
 from .signals import envelope_sync as E
 from .signals import localise as L
 from .signals import nonsync as NS
-from .signals.checks import revolution_speeds
+from .signals.checks import revolution_speeds, settled
 from .signals.localise import weakly
 from .signals.pipeline import first_complete
 
@@ -49,14 +49,15 @@ def input_revolutions(path: str, box: Gearbox, options: InspectOptions, history:
             speed = settle_speed(rec, box, options, speed)[0]
     # without a tacho the angle is zero at the first sample, as a detection's or score's take has it
     angle = speed.angle if rec.tacho is not None else speed.angle - speed.angle[0]
-    with prefixed(f"{rec.path}: vibration '{rec.vibration}'"):
-        revs = resample_revolutions(rec.signal, angle, points=POINTS)
-    first = first_complete(angle)  # numbered as a detection's or score's take (recordings.CutRecording)
+    with prefixed(f"{rec.path}: vibration '{rec.vibration}'"):  # a followed angle's unsettled ends out, as a run's
+        kept = settled(angle, rec.fs, speed.ends)
+        revs = resample_revolutions(rec.signal, angle, points=POINTS)[kept]
+    first = first_complete(angle) + kept.start  # numbered as a detection's or score's take (recordings.CutRecording)
     # the tacho marks a take may start at (localisation turns each take to the first history take's)
     kind = None if rec.tacho is None else options.tacho_kind if options.tacho_kind != "auto" else tacho_kind(rec.tacho)
     shaft = TachoShaft.of(box, options.tacho_shaft or box.sensor.tacho, "--tacho-shaft")
     marks = shaft.marks(options.pulses_per_rev or box.sensor.pulses_per_rev if kind == "pulses" else 1) if kind else 1
-    turns = revolution_speeds(angle, rec.fs)  # a non-synchronous line on a mains harmonic read as hum or a bearing's
+    turns = revolution_speeds(angle, rec.fs)[kept]  # a non-synchronous line on a mains harmonic: hum or a bearing
     return revs, first, rec.fs / (2 * speed.mean_hz), marks, speed, rec.fs, turns if len(turns) == len(revs) else None
 
 

@@ -433,6 +433,7 @@ def _import_measured(spec: MeasuredSpec) -> Dataset:
         gearbox=box,
         tacho_shaft=shaft,
     )
+    source.pop("ends", None)  # every revolution: a followed angle's unsettled ends are left out by localisation alone
     starts = _revolution_bounds(angle, fs, how, path)
     labels = None if per_sample is None else _revolution_labels(per_sample, starts, spec, path)
 

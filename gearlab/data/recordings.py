@@ -51,7 +51,7 @@ from ..files import split_take, take_file  # a take of a logger's file of severa
 from ..gearbox.orders import settle_turns
 from ..gearbox.speed import varies_words  # a run-up said so, with a tacho or without
 from ..signals import check_signal, first_complete
-from ..signals.checks import VARIES_WORDS, fmt_hz, reversal, revolution_speeds, turn_times
+from ..signals.checks import VARIES_WORDS, fmt_hz, reversal, revolution_speeds, settled, turn_times
 from ..signals.spikes import acquisition
 from ..signals.tacho_mended import mended_words
 from ..units import rate_hz
@@ -206,10 +206,9 @@ def read_contents(path, names: Sequence[str], roles: dict[str, str] | None = Non
 def read_channels(path, names: Sequence[str]) -> tuple[dict[str, np.ndarray], float | None]:
     """The named channels of a measured-data file and its sampling rate (None if it has none).
 
-    Arrays come back as stored (numbers, or text for label channels; WAV PCM scaled to
-    ±1). The rate is the file's 'fs' field or follows from its time vector; raises on a
-    missing file or channel, an unreadable file, or a bad or inconsistent rate field.
-    """
+    Arrays come back as stored (numbers, or text for label channels; WAV PCM scaled to ±1). The rate is the file's
+    'fs' field or follows from its time vector; raises on a missing file or channel, an unreadable file, or a bad or
+    inconsistent rate field."""
     names = list(names)
     contents, _ = read_contents(path, names)
     rate = file_rate(contents, None, str(path))
@@ -243,8 +242,7 @@ def rate_value(value, where: str, path: str) -> float:
 def file_rate(contents: Contents, n: int | None, path: str) -> tuple[float, float, str] | None:
     """(fs, relative tolerance, where) from the file's rate fields, or None when it has none.
 
-    An explicit 'fs' field comes first; all fields the file has must agree with each other.
-    """
+    An explicit 'fs' field comes first; all fields the file has must agree with each other."""
     found = [(rate_value(v, where, path), _RATE_RTOL, where) for where, v in contents.rates]
     for where, v in contents.times:
         fs, uncertainty, where = rate_from_time(v, where, path, n, take_columns(contents.available))
@@ -364,11 +362,9 @@ def wrap(x: np.ndarray) -> np.ndarray:
 def tacho_kind(tacho: np.ndarray) -> str:
     """ "angle" or "pulses" for a tacho channel (tacho_kind = "auto").
 
-    A shaft angle rises at (nearly) every sample: steadily (continuous angle), or with
-    wraps of about −2π between steady rises when it is wrapped, in which case it spans one
-    turn (2π ± 1 %). A once-per-revolution pulse train is flat between edges that jump
-    both ways. Anything that is not an angle is read as pulses.
-    """
+    A shaft angle rises at (nearly) every sample: steadily (continuous angle), or with wraps of about −2π between steady
+    rises when it is wrapped, in which case it spans one turn (2π ± 1 %). A once-per-revolution pulse train is flat
+    between edges that jump both ways. Anything that is not an angle is read as pulses."""
     steps = np.diff(tacho)
     if steps.size == 0:
         return "pulses"
@@ -386,10 +382,8 @@ def tacho_kind(tacho: np.ndarray) -> str:
 def angle_tacho(tacho: np.ndarray) -> np.ndarray:
     """A tacho read as an angle -> the wrapped tacho that cut_revolutions unwraps.
 
-    Wrapped angles of any one-turn interval ([-π, π), [0, 2π), a slight overshoot) and
-    continuous angles all become the same [-π, π) tacho; an angle spanning more than a
-    turn with wraps in it (degrees?) is refused.
-    """
+    Wrapped angles of any one-turn interval ([-π, π), [0, 2π), a slight overshoot) and continuous angles all become the
+    same [-π, π) tacho; an angle spanning more than a turn with wraps in it (degrees?) is refused."""
     span = float(tacho.max() - tacho.min())
     continuous = not np.any(np.abs(np.diff(tacho)) > np.pi)
     if span <= (1 + _TURN_SLACK) * TWO_PI or continuous:
@@ -522,11 +516,10 @@ def shaft_angle(
     if rec.tacho is None:
         how = "nominal speed"
         if gearbox is not None:
-            from ..gearbox.speed import follow_speed
+            from ..gearbox.speed import follow_speed, settling
 
-            # a real record's speed always swings a little (0.3 %: every mesh line smeared over its
-            # sidebands, the TSA's mesh harmonic lost); followed on a mesh harmonic's phase, the
-            # revolutions are cut where the shaft turns, as from a tacho
+            # a real record's speed always swings a little (0.3 %: every mesh line smeared over its sidebands, the
+            # TSA's mesh harmonic lost); followed on a mesh harmonic's phase, revolutions are cut as from a tacho
             theta, speed_hz, found, note = follow_speed(
                 rec.signal, fs, gearbox, speed_hz, f"{path}: vibration channel '{rec.vibration}'", file=str(path)
             )
@@ -534,7 +527,7 @@ def shaft_angle(
                 found = found.removesuffix(", followed on a mesh harmonic's phase")
                 angle = wrap(theta - theta[0])  # zero at the first sample, as at a constant speed
                 return (
-                    {"tacho": angle},
+                    {"tacho": angle, "ends": settling(gearbox, speed_hz)},  # unsettled: localisation leaves out
                     unwrap_tacho(angle),
                     f"speed followed on the mesh phase ({found}; {gearbox.name}), mean {fmt_hz(speed_hz)}",
                 )
@@ -587,9 +580,9 @@ def steady_start(
 ) -> tuple[int, str, str | None]:
     """(index of the first steady revolution, how it was found, a warning or None).
 
-    A start-up transient is dropped (steady_start_stats). A level that never settles -- a steady
-    record whose revolution-to-revolution spread exceeds the tolerance, or a slow drift -- is no
-    failure: every revolution is kept and the drift is said in a warning."""
+    A start-up transient is dropped (steady_start_stats). A level that never settles -- a steady record whose
+    revolution-to-revolution spread exceeds the tolerance, or a slow drift -- is no failure: every revolution is kept
+    and the drift is said in a warning."""
     from ..signals import steady_start_stats
 
     if revs.shape[0] < 2:
@@ -625,6 +618,7 @@ class CutRecording:
     speeds: np.ndarray | None = None  # each revolution's (Hz, input shaft): gearlab score scores a run-up's in band
     read: tuple = ()  # (the Recording read, drift out; its flaws) where keep_read: gearlab score reads it once
     reverses: tuple = ()  # (k, t0, t1): its shaft reverses in revolution k - 1, t0 .. t1 s (signals.checks.reversal)
+    settled: slice | None = None  # the revolutions localisation reads: a followed angle's unsettled ends out (Take.of)
 
 
 def cut_recording(
@@ -665,6 +659,7 @@ def cut_recording(
     source, angle, how = shaft_angle(
         rec, pulses_per_rev=pulses_per_rev, speed_hz=speed_hz, gearbox=gearbox, tacho_shaft=tacho_shaft
     )
+    ends = source.pop("ends", 0.0)  # every revolution cut: a followed angle's ends are left out by localisation alone
     turns, how = (angle[-1] - angle[0]) / TWO_PI, how + varies_words(angle, rec)  # a run-up said so, tacho or not
     if turns < 2:
         raise GearlabInputError(
@@ -682,12 +677,14 @@ def cut_recording(
         start, _, warning = steady_start(cut.revolutions, where_, window=window)
     revs, warns = cut.revolutions[start:], rec.warnings + flaws + (() if warning is None else (warning,))
     first, speeds = first_complete(angle) + int(start), revolution_speeds(angle, rec.fs)[start:]  # localisation, score
+    kept = settled(angle, rec.fs, ends)  # localisation's revolutions: a followed angle's unsettled ends out
     made = (str(path), revs, float(cut.speed_hz), float(rec.fs), raw.size, int(start), how, warns, first, rec.units)
     # a shaft that stops and turns back: its speed varies, and a tacho's pulses alone do not tell it (reversal)
     turned = (
         reversal(revs, turn_times(angle, rec.fs)[start:]) if rec.tacho is not None and VARIES_WORDS in how else None
     )
-    return CutRecording(*made, speeds, (rec, flaws) if keep_read else (), turned or ())
+    part = slice(max(kept.start - start, 0), max(kept.stop - start, 0))
+    return CutRecording(*made, speeds, (rec, flaws) if keep_read else (), turned or (), part)
 
 
 # --- the header alone: what `gearlab validate` checks -----------------------------------------

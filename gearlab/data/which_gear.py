@@ -43,8 +43,10 @@ class Take:
 
     @classmethod
     def of(cls, rec) -> Take:
-        """The take of a recordings.CutRecording."""
-        return cls(rec.revolutions, int(rec.first_revolution), float(rec.speed_hz), float(rec.fs), rec.speeds)
+        """The take of a recordings.CutRecording: its revolutions clear of a followed angle's unsettled ends."""
+        part = rec.settled or slice(0, len(rec.revolutions))
+        speeds = None if rec.speeds is None else rec.speeds[part]
+        return cls(rec.revolutions[part], int(rec.first_revolution) + part.start, float(rec.speed_hz), rec.fs, speeds)
 
 
 def band(takes: list[Take]) -> float:

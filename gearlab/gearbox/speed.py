@@ -681,6 +681,19 @@ def _on_mesh(line: float, f: float, box: Gearbox, df: float) -> bool:
     return any(abs(line - max(1.0, round(line / m)) * m) <= tol for m in meshes)
 
 
+def settling(box: Gearbox, f: float) -> float:
+    """Seconds at each end of a record where mesh_angle's angle (input speed *f*, Hz) has not settled: half a period
+    of its low-pass's cutoff (TRACK_CUTOFF of the slowest shaft's frequency), past the main lobe of its kernel (flat
+    to the cutoff, a cosine to 1.5 x: first zero at 0.4 / cutoff), which near an end reads the phase mirrored there,
+    not the take's. A 31/97 box at 8 Hz (10 takes): 26-56e-5 turns rms in the first and last 0.375 s, 8-23e-5 to
+    1 s, 1-5e-5 beyond. Localisation reads a take's revolutions clear of them (signals.settled, CutRecording.settled):
+    the error there, shared by every order of the take, put healthy takes over their thresholds; a whole period cut
+    (0.87 s there) called the same 6 of 360 healthy takes, its faults' z 10-15 % lower (six 3-take histories,
+    development seeds). A detection run's units keep every revolution: a 20/30 + 20/50 box's chip, its four or five
+    record10 units a take, read AUC 0.75-0.94 cut, 0.96 whole (one set of takes; 1.00 both on another)."""
+    return 0.5 / (TRACK_CUTOFF * float(min(order_table(box).shaft_orders)) * f)
+
+
 RECENTRE = 0.002  # a followed mean this far off the band's centre is followed again about itself (mesh_angle)
 RECENTRE_TRIES = 2
 

@@ -92,7 +92,9 @@ def _cut(rec, part: slice):
     speeds = rec.speeds[part]
     first = rec.first_revolution + part.start
     cut = replace(rec, revolutions=rec.revolutions[part], speed_hz=float(np.mean(speeds)), first_revolution=first)
-    return replace(cut, speeds=speeds, reverses=())
+    kept = rec.settled or slice(0, len(rec.revolutions))  # a followed angle's settled revolutions, within the part's
+    settled = slice(max(kept.start - part.start, 0), max(min(kept.stop, part.stop) - part.start, 0))
+    return replace(cut, speeds=speeds, reverses=(), settled=settled)
 
 
 def steady(rec, whose: str = "") -> InBand:

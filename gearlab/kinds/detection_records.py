@@ -13,6 +13,7 @@ from fractions import Fraction
 
 import numpy as np
 
+from ..data import which_gear as W
 from ..data.chain import Chain
 from ..data.channel_units import TOO_LOUD, TOO_QUIET
 from ..data.spec import DatasetSpec
@@ -376,8 +377,10 @@ def read_target(
         # as cut, before standardising and aligning (which rotate each revolution): what
         # localisation reads (detection_which_gear), with the first revolution's number from the tacho
         # mark (on its own shaft; without a tacho, from the record's first sample)
-        cond.setdefault("raw", {})[f.path] = (records[f.path].revolutions, records[f.path].first_revolution)
-        cond.setdefault("turn_speeds", {})[f.path] = records[f.path].speeds  # a hum told from a bearing (nonsync)
+        # (a followed angle's unsettled ends out: Take.of; each revolution's speed: a hum told from a bearing, nonsync)
+        take = W.Take.of(records[f.path])
+        cond.setdefault("raw", {})[f.path] = (take.revolutions, take.first)
+        cond.setdefault("turn_speeds", {})[f.path] = take.speeds
     for name, cond in conditions.items():
         if not cond["history"]:
             # a history that contradicts the description said first: every take's speed read off its wrong tooth

@@ -154,6 +154,15 @@ def revolution_speeds(angle: np.ndarray, fs: float) -> np.ndarray:
     return 1.0 / np.diff(turn_times(angle, fs))
 
 
+def settled(angle: np.ndarray, fs: float, ends: float) -> slice:
+    """The complete revolutions of *angle* (as turn_times counts them) lying *ends* seconds or more from either end of
+    the record (an angle followed without a tacho has not settled there: gearbox.speed.settling); all of them where
+    that would leave fewer than half (a guard: a short take is kept whole rather than cut to a few turns)."""
+    at = turn_times(angle, fs)
+    keep = np.flatnonzero((at[:-1] >= ends) & (at[1:] <= (angle.size - 1) / fs - ends))
+    return slice(int(keep[0]), int(keep[-1]) + 1) if 2 * keep.size >= at.size - 1 > 0 else slice(0, max(at.size - 1, 0))
+
+
 def speed_varies(angle: np.ndarray, fs: float, smooth: int = 5) -> str:
     """ "; 20.08 Hz .. 34.93 Hz over the take: a run-up: ..." where the shaft *angle* (radians, one a sample at
     *fs*) turns at speeds, each the mean over *smooth* turns, spanning more than SPEED_VARIES of their mean (their
