@@ -239,7 +239,8 @@ def call_of(loc: dict, ns: dict, speed_hz: float | None = None) -> str:
     beside them (nonsync.beside); else other damage where the non-synchronous residual changed; else no change."""
     if loc["named"]:  # every shaft whose change is its own, the named first (damage on two gears: both)
         shafts = W.flagged_shafts(loc) if loc.get("shafts") else [{"gear": loc["named"]}]
-        bearing = NS.beside(ns, speed_hz)  # a bearing's line beside a gear's change: said too
+        flagged = [s.get("shaft", loc.get("named_shaft")) for s in shafts]
+        bearing = NS.beside(ns, speed_hz, flagged)  # a bearing's line beside a gear's change: said too
         also = f"; also other damage: {bearing}" if bearing else ""
         return "localised change: " + "; ".join(s["gear"] + weakly(s) for s in shafts) + also
     if ns.get("changed"):

@@ -26,8 +26,9 @@ units then means:
     (level_call: a sensor, gain or load changed; `gearlab score` too)  (...): no damage, set aside
     a watched gear's shaft and another shaft over their thresholds     a watched-gear fault; also
     (a pinion and its wheel both damaged)                              other damage: <that gear>
-    a gear named and a non-synchronous line at no shaft's order        ...; also other damage: non-
-    (signals.nonsync.beside: a bearing's beside a tooth's)             synchronous (bearing-like), ...
+    a gear named and a non-synchronous line at no product of its       ...; also other damage: non-
+    shaft's gear fault (signals.nonsync.beside: a bearing's beside a   synchronous (bearing-like), ...
+    tooth's)
 
 The watched gears are those the source's fault classes sit on: both of a pinion-and-wheel class
 ("chip+chip@wheel"). A record with damage on a watched gear and on another is counted as both (the
@@ -116,7 +117,8 @@ def call_of(found: dict, watched: list[str], nonsync: dict | None = None, speed_
         # mesh phases lean (which_template.EVEN_LEAD)
         on = T.callable_gears(ev)
         (mine if any(g in watched for g in on) else others).append(ev["gear"] + L.weakly(ev))
-    if bearing := NS.beside(nonsync, speed_hz):  # a bearing's strikes beside a gear's damage: both said
+    flagged = [ev["shaft"] for ev in shafts]
+    if bearing := NS.beside(nonsync, speed_hz, flagged):  # a bearing's strikes beside a gear's damage: both said
         others.append(bearing)
     if mine:
         return f"{WATCHED}: {'; '.join(mine)}" + (ALSO + "; ".join(others) if others else "")

@@ -75,6 +75,7 @@ OWN = 0.25  # ... whose own line's z is at least this share of the largest (not 
 LINE = 8  # bins on either side whose median z a line's z is read over (half an order)
 BEAT = 5  # mesh harmonics whose first sidebands are left out of the search (synchronous_bins)
 SLOW = 4  # harmonics of a slower shaft's order (a mesh's sidebands by the slowest) left out of the search
+MATE = 4  # orders of a faulty gear's mate (its mesh's sidebands by the shaft it meshes with) in its products
 SUM = 1  # bins on either side summed with each bin (a slipping strike's line spreads)
 SMOOTH = 9  # bins over which the history's sd is pooled
 BETWEEN = 101  # bins over which the history records' spread beyond their blocks' noise is pooled
@@ -317,7 +318,7 @@ class NonSync:
     threshold: float
     locked: str = ""
     why: str = ""
-    shaft: str = ""  # the shaft a whole order of which the strike order is (on_shaft): a named gear's own leak
+    shafts: tuple[str, ...] = ()  # the shafts a fault on whose gear puts a line at the strike order (products)
     threshold_from: str = ""  # the history's (NonSyncHistory.threshold_from): "" where today's rule
 
     @property
@@ -327,27 +328,43 @@ class NonSync:
     def describe(self) -> dict:
         said = {"z": self.z, "order": self.order, "threshold": self.threshold, "changed": self.changed}
         said |= {"threshold_from": self.threshold_from} if self.threshold_from else {}
-        return said | {"locked": self.locked, "why": self.why, "shaft": self.shaft}
+        return said | {"locked": self.locked, "why": self.why, "shafts": list(self.shafts)}
 
 
-def on_shaft(order: float, table) -> str:
-    """The shaft (its name) of which the strike *order* is a whole order, within half a bin of a block; "" for none.
-    A strong tooth fault on a slow shaft's gear leaks past the bins the residual removes (residual: a 38/103 wheel's
-    chip over a 4 s take, 41 output turns, read z 8.2 over 4.47 at its 7th order, 2.58), so a line there beside a
-    gear named is that gear's; a bearing's strike order is no shaft's (3.62 of the 38/103 input, 9.8 output orders)."""
-    for name, o in zip(table.shafts, table.shaft_orders):
-        k = round(order / float(o))
-        if k >= 1 and abs(order - k * float(o)) <= 0.5 / BLOCK:
-            return name
-    return ""
+def products(order: float, table, revolutions: float) -> tuple[str, ...]:
+    """The shafts a localised tooth fault on whose gear puts the residual's envelope line at input order *order* (its
+    peak over *revolutions* input turns: refined), each shaft's name; () for none. A tooth fault strikes its mesh
+    once a turn of its shaft s, so it modulates the mesh at every order k o_s, and the mesh carries its sidebands by
+    the shaft it meshes with (its mate m, the other shaft of a stage s is on) at their first orders: the residual keeps
+    their products, k o_s + n o_m (no whole order of either shaft), and its envelope their differences, of the same
+    form. Beside a gear named on s, a line there (|n| <= MATE; n = 0: the shaft's own orders, which a strong fault
+    leaks past the bins removed) is the gear's own; a bearing's strike order lies there by chance only. The lattice is
+    read within half a bin of the whole take (1 / *revolutions* orders: two lines nearer than that are one line over
+    it), not a fixed share of an order (1/32 about every shaft's orders excused 60 % of orders on a 23/59 + 19/71
+    box's output shaft, 0.104 input orders, whichever gear was named). Chipped-gear takes' lines excused (development
+    seeds 11-18, 21-25, gear named, line over the threshold): 37/89 box 20 of 22 (8 before), 23/59 + 19/71 box 9 of
+    11 (8); lines of a bearing beside them excused 3 of 12 (2) and 1 of 8 (5)."""
+    tol = 0.5 / revolutions
+    got = []
+    for i, (name, o) in enumerate(zip(table.shafts, table.shaft_orders)):
+        for j in (i - 1, i + 1):
+            if not 0 <= j < len(table.shafts):
+                continue
+            rest = order - np.arange(-MATE, MATE + 1) * float(table.shaft_orders[j])
+            k = np.round(rest / float(o))
+            if np.any((k >= 0) & (np.abs(rest - k * float(o)) <= tol)):
+                got.append(name)
+                break
+    return tuple(got)
 
 
-def beside(ns: dict | None, speed_hz: float | None) -> str:
-    """A non-synchronous change read beside a gear's localised one, as a run, `gearlab score` and `inspect --history`
-    add it to their call ("non-synchronous (bearing-like), at order 3.62"): a line over its threshold at a strike
-    order no shaft's whole order (on_shaft), not a mains hum; "" for none (a chipped 38T pinion beside a bearing's
-    outer-race strikes, z 20.2 over 4.47, was called the pinion's alone)."""
-    if not ns or not ns.get("changed") or ns.get("shaft") or ns.get("locked") == "time":
+def beside(ns: dict | None, speed_hz: float | None, flagged) -> str:
+    """A non-synchronous change read beside a gear's localised one on the shafts *flagged* (their names), as a run,
+    `gearlab score` and `inspect --history` add it to their call ("non-synchronous (bearing-like), at order 3.62"): a
+    line over its threshold at a strike order that is no product of a flagged shaft's gear fault (products), not a
+    mains hum; "" for none (a chipped 38T pinion beside a bearing's outer-race strikes, z 20.2 over 4.47, was called
+    the pinion's alone; a 37/89 box's chipped pinion alone, its line at 3 o_1 - 2 o_2, was called a bearing too)."""
+    if not ns or not ns.get("changed") or set(ns.get("shafts", ())) & set(flagged) or ns.get("locked") == "time":
         return ""
     hz = None if speed_hz is None else ns["order"] * speed_hz
     return call(ns["order"], hz, ns.get("locked", ""), ns.get("why", "")).removeprefix("other damage: ")
@@ -429,19 +446,32 @@ def _z(z: np.ndarray) -> tuple[float, float]:
     return float(z.max()), float((lo + near[np.argmax(z[near])]) / BLOCK)
 
 
-def refined(r: np.ndarray, points: int, order: float) -> float:
-    """*order* read finer: the power centroid of the whole residual's squared-envelope spectrum (resolution
-    1 / its revolutions) within a bin of the blocks' spectrum of it, over that window's median. Its FFTs are
-    gearlab.signals.fft's: a whole take's length has its revolutions' prime factors (a 60 s take's 2399: 42 s)."""
+def refined(r: np.ndarray, points: int, order: float) -> tuple[float, float]:
+    """(*order* read finer: the power centroid of the whole residual's squared-envelope spectrum (resolution
+    1 / its revolutions) within a bin of the blocks' spectrum of it, over that window's median; the line's peak: the
+    highest of that spectrum, read in FINE steps a bin, within the SUM + 1/2 bins of it a block's bin sums). A line
+    locked to the shafts (products) stands within a fraction of a bin of its order at its peak, where a centroid
+    pulled by the lines beside it need not (a 37/89 box's chipped pinion's line at 2.1685, 95 turns: centroid 2.1958,
+    peak 2.1684). Its FFTs are gearlab.signals.fft's: a whole take's length has its revolutions' prime factors (a 60
+    s take's 2399: 42 s)."""
     from .fft import analytic, rfft
 
     e = np.abs(analytic(r)) ** 2
-    E = np.abs(rfft(e - e.mean())) ** 2
+    X = rfft(e - e.mean())
+    E = np.abs(X) ** 2
     revs = r.size / points
     k = np.arange(int((order - 1.0 / BLOCK) * revs), int((order + 1.0 / BLOCK) * revs) + 2)
     k = k[(k > 0) & (k < E.size)]
     w = np.clip(E[k] - np.median(E[k]), 0.0, None)
-    return float(np.sum(w * k) / np.sum(w) / revs) if w.sum() > 0 else order
+    if not w.sum() > 0:
+        return order, order
+    # the window's bins and ZOOM about them interpolated FINE times a bin (their DFT zero-padded back from them)
+    lo, hi = max((order - (SUM + 0.5) / BLOCK) * revs, 1.0), min((order + (SUM + 0.5) / BLOCK) * revs, X.size - 1.0)
+    near = np.arange(max(int(lo) - ZOOM, 0), min(int(hi) + ZOOM + 2, X.size))
+    fine = np.abs(np.fft.fft(np.fft.ifft(X[near]), n=FINE * near.size)) ** 2
+    at = near[0] + np.arange(fine.size) / FINE
+    inside = (at >= lo) & (at <= hi)
+    return float(np.sum(w * k) / np.sum(w) / revs), float(at[inside][np.argmax(fine[inside])] / revs)
 
 
 def history(takes: list[np.ndarray], table, speeds: list[float] | None = None) -> NonSyncHistory:
@@ -542,12 +572,12 @@ def read_take(
     blocks = envelope_blocks(r, np.shape(take)[-1])
     lines = line_z(blocks, list(hist.blocks), synchronous_bins(table, blocks.shape[1]))
     z, order = _z(lines)
-    order = refined(r, np.shape(take)[-1], order)
-    shaft = on_shaft(order, table)
+    order, top = refined(r, np.shape(take)[-1], order)
+    shafts = products(top, table, r.size / np.shape(take)[-1])
     if speeds is None or len(speeds) != len(take) or harmonic(order * mean_speed(speeds)) is None:
-        return NonSync(z, order, hist.threshold, shaft=shaft, threshold_from=hist.threshold_from), lines
+        return NonSync(z, order, hist.threshold, shafts=shafts, threshold_from=hist.threshold_from), lines
     locked = hum_or_bearing(r, np.shape(take)[-1], order, speeds, hist, table)
-    return NonSync(z, order, hist.threshold, *locked, shaft=shaft, threshold_from=hist.threshold_from), lines
+    return NonSync(z, order, hist.threshold, *locked, shafts=shafts, threshold_from=hist.threshold_from), lines
 
 
 def mean_speed(speeds: np.ndarray) -> float:
