@@ -4,6 +4,7 @@ unknown name."""
 import difflib
 import math
 import re
+from contextlib import contextmanager
 
 # Line breaks and other control characters; they reach messages inside names taken from the
 # user's files (a TOML key "a\nb", a channel name in an HDF5 file).
@@ -50,6 +51,15 @@ class GearlabInputError(Exception):
 
     def __init__(self, message: object = "", *args):
         super().__init__(_short(one_line(str(message))), *args)
+
+
+@contextmanager
+def prefixed(prefix: str):
+    """Re-raise GearlabInputError from the shared pipeline with the file (and channel) in front."""
+    try:
+        yield
+    except GearlabInputError as exc:
+        raise GearlabInputError(f"{prefix}: {exc}") from None
 
 
 class UnknownPluginError(GearlabInputError):

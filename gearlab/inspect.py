@@ -26,6 +26,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .charts import envelope
+from .data.channel_series import same_length, series
 from .data.recordings import (
     Recording,
     angle_tacho,
@@ -38,9 +39,7 @@ from .data.recordings import (
     prefixed,
     pulses_without_tacho,
     read_contents,
-    same_length,
     sampling_rate,
-    series,
     tacho_kind,
 )
 from .errors import GearlabInputError

@@ -116,3 +116,22 @@ def test_validate_names_the_column_out_of_range(tmp_path, cli):
     assert got == 2, (out, err)
     lines = [line for line in err.splitlines() if line.strip()]
     assert len(lines) == 1 and "take.mat" in lines[0] and "'vibration'" in lines[0] and "data[1]" in lines[0], err
+
+
+def test_a_matrix_whose_columns_are_named_is_no_channel_to_inspect_as_to_validate(tmp_path, cli):
+    # issue 39: an HDF5 (N, 3) 'data' whose attribute names its columns: validate said "no channel 'data'; the
+    # file has channels: acc_in, acc_out, tacho", inspect and the run a shape refusal with a 'data[0]' … hint
+    path = tmp_path / "take.h5"
+    with h5py.File(path, "w") as f:
+        f["data"] = np.column_stack([_data(), _data()[:, 0]])[:, [0, 2, 1]]
+        f["data"].attrs["fs"] = FS
+        f["data"].attrs["channel_names"] = ["acc_in", "acc_out", "tacho"]
+    listed = "no channel 'data' (a vibration channel: acc_in, acc_out?); the file has channels: acc_in, acc_out, tacho"
+    assert listed in _refusal(path, "data")
+    with pytest.raises(GearlabInputError) as err:
+        read_recording(path, "data", unit="m/s^2")
+    assert str(err.value) == f"{path}: {listed.replace('no channel', 'no vibration channel')}"
+    got, out, err_text = cli("inspect", path, "--vibration", "data")
+    lines = [line for line in err_text.splitlines() if line.strip()]
+    assert got == 2 and len(lines) == 1 and listed.replace("no channel", "no vibration channel") in lines[0], err_text
+    assert read_recording(path, "data[1]", "tacho", unit="m/s^2").signal.size == 2000  # its columns still read

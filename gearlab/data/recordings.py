@@ -40,22 +40,22 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Sequence
-from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import GearlabInputError, which_meant
+from ..errors import GearlabInputError, prefixed, which_meant
 from ..files import split_take, take_file  # a take of a logger's file of several: data.takes
 from ..gearbox.orders import settle_turns
 from ..gearbox.speed import varies_words  # a run-up said so, with a tacho or without
-from ..signals import check_signal, first_complete
+from ..signals import first_complete
 from ..signals.checks import VARIES_WORDS, fmt_hz, reversal, revolution_speeds, settled, turn_times
 from ..signals.spikes import acquisition
 from ..signals.tacho_mended import mended_words
 from ..units import rate_hz
 from . import raw_binary
+from .channel_series import same_length, series  # every channel read as a series: one check
 from .channel_units import STANDARD_GRAVITY as STANDARD_GRAVITY  # the one g of units and sensitivities
 from .channel_units import UNITS as UNITS
 from .channel_units import channel_scale as channel_scale
@@ -94,18 +94,6 @@ _RATE_RTOL = 1e-6
 _TURN_SLACK = 0.01
 # Share of rising steps that marks a channel as a shaft angle rather than a pulse train (flat most of the time)
 _RISING_SHARE = 0.9
-
-
-# --- errors ------------------------------------------------------------------------------
-
-
-@contextmanager
-def prefixed(prefix: str):
-    """Re-raise GearlabInputError from the shared pipeline with the file (and channel) in front."""
-    try:
-        yield
-    except GearlabInputError as exc:
-        raise GearlabInputError(f"{prefix}: {exc}") from None
 
 
 def file_problem(path: Path) -> str | None:
@@ -192,8 +180,8 @@ def read_contents(path, names: Sequence[str], roles: dict[str, str] | None = Non
         for c in take_columns(contents.available)
         if c not in read
     ]
-    for name in names:
-        if name not in contents.found:
+    for name in names:  # a matrix whose columns are named is none, as validate's header says (readers.headers)
+        if name not in contents.found or name in contents.matrices:
             role = f"{roles[name]} " if roles and name in roles else ""
             free = [c for c in contents.available if c not in (roles or {})]  # not the tacho's own, given
             raise GearlabInputError(
@@ -282,73 +270,6 @@ def sampling_rate(contents: Contents, given: float | None, n: int, path: str) ->
         # Agreeing within the tolerance; the given figure is exact where a time column is rounded.
         return float(given), f"given, agrees with {where}"
     return fs, where
-
-
-# --- channels ----------------------------------------------------------------------------
-
-
-def _first_text(arr: np.ndarray) -> tuple[int, str]:
-    """Position and value of the first entry of a text array that is not a number."""
-    for i, v in enumerate(arr.ravel().tolist()):
-        try:
-            float(v)
-        except (TypeError, ValueError):
-            return i, v
-    return 0, arr.ravel()[0] if arr.size else ""
-
-
-def _struct_series(value, at: str, depth: int = 0) -> list[str]:
-    """The dotted names of a MATLAB struct's (scipy's mat_struct) fields that hold series of numbers, nested too."""
-    if depth > 3 or not hasattr(value, "_fieldnames"):
-        return []
-    found = []
-    for key in value._fieldnames:
-        inner, name = getattr(value, key), f"{at}.{key}"
-        arr = np.asarray(inner)
-        if arr.dtype.kind in "iuf" and arr.size > 1:
-            found.append(name)
-        elif arr.dtype.kind == "O" and arr.size == 1:
-            found += _struct_series(arr.item(), name, depth + 1)
-    return found
-
-
-def series(raw, name: str, role: str, path: str) -> np.ndarray:
-    """A channel as a 1-D finite float64 time series (check_signal), or one clear line."""
-    what = f"{role} channel '{name}'"
-    arr = np.asarray(raw)
-    if arr.dtype.kind in "US":
-        i, v = _first_text(arr)
-        shown = "an empty field" if v == "" else repr(v)
-        raise GearlabInputError(f"{path}: {what} is not numeric: {shown} at sample {i}; expected numbers")
-    if arr.dtype.kind == "O" and arr.size == 1 and (fields := _struct_series(arr.item(), name)):
-        # a MATLAB struct named for its channel (Simcenter Testlab's Signal_1, its numbers in y_values.values)
-        raise GearlabInputError(
-            f"{path}: {what} is not numeric: a struct; expected the field that holds its numbers: "
-            + ", ".join(fields[:4])
-        )
-    if arr.dtype.kind not in "biuf":
-        raise GearlabInputError(f"{path}: {what} is not numeric (stored as {arr.dtype}); expected an array of numbers")
-    if arr.dtype.kind == "b" and role == "vibration":  # a tacho's pulses may be true/false; a vibration not
-        raise GearlabInputError(f"{path}: {what} holds true/false values; expected a vibration signal of numbers")
-    if arr.ndim > 1 and sum(s > 1 for s in arr.shape) <= 1:
-        arr = arr.reshape(-1)  # a 1×N or N×1 matrix is one channel
-    if arr.ndim == 0:
-        raise GearlabInputError(f"{path}: {what} holds a single value; expected a time series, one value per sample")
-    if arr.ndim > 1:
-        raise GearlabInputError(
-            f"{path}: {what} has shape {arr.shape}; expected one channel over time (a 1-D array)"
-            + (f", e.g. one of its columns: '{name}[0]' … '{name}[{min(arr.shape) - 1}]'" if arr.ndim == 2 else "")
-        )
-    with prefixed(path):
-        return check_signal(arr, what)
-
-
-def same_length(x: np.ndarray, name: str, role: str, n: int, vibration: str, path: str) -> None:
-    if x.size != n:
-        raise GearlabInputError(
-            f"{path}: {role} channel '{name}' has {x.size} samples but vibration channel '{vibration}' has {n}; "
-            "expected channels of equal length (one value per sample)"
-        )
 
 
 # --- shaft angle -------------------------------------------------------------------------

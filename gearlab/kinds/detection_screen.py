@@ -28,8 +28,9 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ..data.channel_series import series
 from ..data.readers.text import asked_numbers_only
-from ..data.recordings import CutRecording, Recording, channel_key, read_contents, sampling_rate, series, shaft_angle
+from ..data.recordings import CutRecording, Recording, channel_key, read_contents, sampling_rate, shaft_angle
 from ..errors import GearlabInputError
 from ..parts.measured import Target
 from ..signals.checks import revolution_speeds, speed_varies

@@ -126,6 +126,8 @@ class Contents:
     units: dict[str, str] = field(default_factory=dict)
     # what the reader left out of the file, said once (a logger's footer under the rows: csv.footer_note)
     warnings: list[str] = field(default_factory=list)
+    # the names asked of arrays that are no channel of their own, read for their named columns (hdf5.named_matrices)
+    matrices: set[str] = field(default_factory=set)
 
 
 # The unit a file states as text beside its channels, as users save one: an NPZ's `unit="g"` or `vib_unit="m/s^2"`, a

@@ -91,7 +91,8 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
         datasets = _hdf5_datasets(h5py, f)
         columns = named_columns(f, datasets)
         whole = named_matrices({d: f[d].shape for d in datasets}, columns)
-        contents = Contents({}, [d for d in datasets if d not in whole] + [n for n in columns if n not in datasets])
+        listed = [d for d in datasets if d not in whole] + [n for n in columns if n not in datasets]
+        contents = Contents({}, listed)
         seen: set[str] = set()
         own: dict[str, tuple] = {}  # each channel's one rate field, where it has one
         at: dict[str, str] = {}  # each channel's dataset path
@@ -116,6 +117,8 @@ def _read_hdf5(path: Path, names: Sequence[str], matlab: bool = False) -> Conten
                 unit = column[2]
             else:
                 contents.found[name] = values[obj.name]
+                if at[name] in whole:  # asked by its name (or its last name): listed as its columns alone
+                    contents.matrices.add(name)
                 unit = stated_unit(obj.attrs)
                 mine = (c for c in columns.values() if c[0] == at[name] and c[2])
                 contents.units.update({f"{name}[{i}]": u for _, i, u in mine})  # 'data[1]': its column's unit
