@@ -64,6 +64,14 @@ class Running:
     events: Events = False
 
 
+def trains(command: Callable[..., None]) -> Callable[..., None]:
+    """*command* marked as one that trains: it keeps the BLAS threads the machine gives (its threads are set
+    where it trains: learn/, gearlab.executors' pool and aside thread); every other command runs on one
+    (cli.one_blas_thread)."""
+    command.trains = True
+    return command
+
+
 def runs_a_scenario(command: Callable[..., None]) -> Callable[..., None]:
     """*command* with the Running options after its own, in the signature typer reads; *command*
     gets them gathered as its last parameter, `how` (a Running)."""
@@ -79,7 +87,7 @@ def runs_a_scenario(command: Callable[..., None]) -> Callable[..., None]:
 
     with_options.__signature__ = Signature(own + shared, return_annotation=None)
     with_options.__annotations__ = {p.name: p.annotation for p in own + shared}
-    return with_options
+    return trains(with_options)
 
 
 @app.command()

@@ -9,11 +9,13 @@ import typer
 
 from ..cliconv import conventional
 from ..errors import GearlabInputError
+from .running import trains
 
 app = conventional(typer.Typer())
 
 
 @app.command()
+@trains  # the runs it starts
 def tui(directory: Annotated[Path, typer.Argument(help="folder of scenario files")] = Path("scenarios")) -> None:
     """Browse scenarios, run them and watch progress, read and compare results, list plugins.
 
