@@ -50,7 +50,7 @@ def input_revolutions(path: str, box: Gearbox, options: InspectOptions, history:
     # without a tacho the angle is zero at the first sample, as a detection's or score's take has it
     angle = speed.angle if rec.tacho is not None else speed.angle - speed.angle[0]
     with prefixed(f"{rec.path}: vibration '{rec.vibration}'"):  # a followed angle's unsettled ends out, as a run's
-        kept = settled(angle, rec.fs, speed.ends)
+        kept = settled(angle, rec.fs, speed.ends, NS.revolutions_needed(order_table(box)))
         revs = resample_revolutions(rec.signal, angle, points=POINTS)[kept]
     first = first_complete(angle) + kept.start  # numbered as a detection's or score's take (recordings.CutRecording)
     # the tacho marks a take may start at (localisation turns each take to the first history take's)

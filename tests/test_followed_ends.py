@@ -25,6 +25,8 @@ def test_settled_keeps_the_revolutions_clear_of_either_end():
     # revolution r spans r / 10 .. (r + 1) / 10 s: from 0.3 s on, and ending by 4.999 - 0.25 s
     assert settled(angle, fs, 0.25) == slice(3, 47)
     assert settled(angle, fs, 2.0) == slice(0, 49)  # 9 of 49 left: the take kept whole
+    assert settled(angle, fs, 0.25, need=44) == slice(3, 47)  # 44 left: as many as the which-gear check needs
+    assert settled(angle, fs, 0.25, need=45) == slice(0, 49)  # one short of them: the take read whole, ends in
 
 
 def test_a_take_without_a_tacho_is_localised_on_its_settled_revolutions_in_every_reading(tmp_path):

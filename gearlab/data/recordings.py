@@ -47,10 +47,11 @@ import numpy as np
 
 from ..errors import GearlabInputError, prefixed, which_meant
 from ..files import split_take, take_file  # a take of a logger's file of several: data.takes
-from ..gearbox.orders import settle_turns
+from ..gearbox.orders import order_table, settle_turns
 from ..gearbox.speed import varies_words  # a run-up said so, with a tacho or without
 from ..signals import first_complete
 from ..signals.checks import VARIES_WORDS, fmt_hz, reversal, revolution_speeds, settled, turn_times
+from ..signals.nonsync import revolutions_needed
 from ..signals.spikes import acquisition
 from ..signals.tacho_mended import mended_words
 from ..units import rate_hz
@@ -598,7 +599,8 @@ def cut_recording(
         start, _, warning = steady_start(cut.revolutions, where_, window=window)
     revs, warns = cut.revolutions[start:], rec.warnings + flaws + (() if warning is None else (warning,))
     first, speeds = first_complete(angle) + int(start), revolution_speeds(angle, rec.fs)[start:]  # localisation, score
-    kept = settled(angle, rec.fs, ends)  # localisation's revolutions: a followed angle's unsettled ends out
+    need = revolutions_needed(order_table(gearbox)) if ends else 0  # a take the which-gear check reads whole
+    kept = settled(angle, rec.fs, ends, need)  # localisation's revolutions: a followed angle's unsettled ends out
     made = (str(path), revs, float(cut.speed_hz), float(rec.fs), raw.size, int(start), how, warns, first, rec.units)
     # a shaft that stops and turns back: its speed varies, and a tacho's pulses alone do not tell it (reversal)
     turned = (

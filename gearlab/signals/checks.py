@@ -154,13 +154,15 @@ def revolution_speeds(angle: np.ndarray, fs: float) -> np.ndarray:
     return 1.0 / np.diff(turn_times(angle, fs))
 
 
-def settled(angle: np.ndarray, fs: float, ends: float) -> slice:
+def settled(angle: np.ndarray, fs: float, ends: float, need: int = 0) -> slice:
     """The complete revolutions of *angle* (as turn_times counts them) lying *ends* seconds or more from either end of
     the record (an angle followed without a tacho has not settled there: gearbox.speed.settling); all of them where
-    that would leave fewer than half (a guard: a short take is kept whole rather than cut to a few turns)."""
+    that would leave fewer than half, or fewer than *need* (the which-gear check's least: a take long enough for it
+    whole is read whole, its ends in, rather than refused as too short once they are out)."""
     at = turn_times(angle, fs)
     keep = np.flatnonzero((at[:-1] >= ends) & (at[1:] <= (angle.size - 1) / fs - ends))
-    return slice(int(keep[0]), int(keep[-1]) + 1) if 2 * keep.size >= at.size - 1 > 0 else slice(0, max(at.size - 1, 0))
+    cut = 2 * keep.size >= at.size - 1 > 0 and keep.size >= need
+    return slice(int(keep[0]), int(keep[-1]) + 1) if cut else slice(0, max(at.size - 1, 0))
 
 
 def speed_varies(angle: np.ndarray, fs: float, smooth: int = 5) -> str:

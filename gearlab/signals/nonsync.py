@@ -156,6 +156,12 @@ def too_short(revolutions: int, table) -> str | None:
     )
 
 
+def revolutions_needed(table) -> int:
+    """The input revolutions holding TURNS turns of order table *table*'s slowest shaft: the which-gear check's least
+    (data.which_gear), which a followed angle's unsettled ends are not cut below (signals.settled)."""
+    return math.ceil(TURNS / min(float(o) for o in table.shaft_orders))
+
+
 def slowest_turns(revolutions: int, table) -> tuple[float, str]:
     """(turns, name) of the slowest shaft of order table *table* over *revolutions* input revolutions: what TURNS
     counts, here and in the shafts' own averages (data.which_gear)."""
