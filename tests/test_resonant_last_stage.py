@@ -17,28 +17,36 @@ from gearlab.gearbox import load_gearbox
 from gearlab.inspect import InspectOptions, inspect_record
 
 SPEED, POINTS, TURNS = 30.0, 640, 30  # 1 s at 19.2 kHz: whole points a turn, 30 turns
+FIRST = ((21, 63), (18, 54))  # the stages before the last
 CASING = {"name": "casing_path", "mf": 6.0, "k_xf": 5e7, "k_yf": 2e8, "c_xf": 2e3, "c_yf": 2e3}
 
 
-def box(last: tuple[int, int]) -> str:
-    """21/63 + 18/54 + *last* at 30 Hz, the tacho on the input."""
-    stages = (
-        stage(21, 63, "2 mm", "20 mm", ("20 mm", "25 mm")),
-        stage(18, 54, "2.5 mm", "25 mm", ("25 mm", "30 mm")),
-        stage(*last, "3 mm", "30 mm", ("30 mm", "40 mm")),
-    )
+def box(last: tuple[int, int], first: tuple = FIRST) -> str:
+    """The *first* stages (21/63 + 18/54 as FIRST) and *last* at 30 Hz, the tacho on the input."""
+    shapes = (("2 mm", "20 mm", ("20 mm", "25 mm")), ("2.5 mm", "25 mm", ("25 mm", "30 mm")))
+    stages = [stage(*teeth, *shape) for teeth, shape in zip(first, shapes)]
+    # a 14-tooth pinion of 20 degrees meets its wheel's tip below its base circle unless its profile is shifted
+    last_stage = stage(*last, "3 mm", "30 mm", ("30 mm", "40 mm"))
+    stages.append(last_stage.replace("z = 14, ", "z = 14, x = 0.3, "))
     return description(*stages, name="three", speed="30 Hz", load="40 N*m", near="input", tacho="input")
 
 
 @pytest.fixture(scope="module")
 def takes(tmp_path_factory) -> dict:
-    """{(the last stage simulated, its input revolutions): (its take's .npz, its revolutions as rows)}, the casing
-    ringing in each."""
+    """{(the last stage simulated, its input revolutions, the stages before it): (its take's .npz, its revolutions as
+    rows)}, the casing ringing in each."""
     folder = tmp_path_factory.mktemp("resonant")
     made = {}
-    for last, turns in (((15, 45), TURNS), ((135, 405), TURNS), ((45, 135), TURNS), ((15, 45), 2 * TURNS)):
-        path = folder / f"real{last[0]}.toml"
-        path.write_text(box(last))
+    for last, turns, first in (
+        ((15, 45), TURNS, FIRST),
+        ((135, 405), TURNS, FIRST),
+        ((45, 135), TURNS, FIRST),
+        ((15, 45), 2 * TURNS, FIRST),
+        ((16, 48), TURNS, FIRST),
+        ((15, 45), 2 * TURNS, FIRST[:1]),
+    ):
+        path = folder / f"real{last[0]}_{len(first)}.toml"
+        path.write_text(box(last, first))
         rec = simulated_record(
             [],
             gearbox=str(path),
@@ -49,23 +57,25 @@ def takes(tmp_path_factory) -> dict:
             fs=POINTS * SPEED,
             effects=[CASING],
         )
-        take = folder / f"take{last[0]}_{turns}.npz"
+        take = folder / f"take{last[0]}_{turns}_{len(first)}.npz"
         np.savez(take, acc=rec.vibration, tacho=rec.tacho, fs=POINTS * SPEED)
-        made[last, turns] = (take, rec.vibration[: turns * POINTS].reshape(turns, POINTS))
+        made[last, turns, first] = (take, rec.vibration[: turns * POINTS].reshape(turns, POINTS))
     return made | {"folder": folder}
 
 
-def inspected(takes: dict, real: tuple[int, int], said: tuple[int, int], turns: int = TURNS) -> dict:
-    path = takes["folder"] / f"said{said[0]}.toml"
-    path.write_text(box(said))
+def inspected(takes: dict, real: tuple[int, int], said: tuple[int, int], turns: int = TURNS, first=None) -> dict:
+    first = first or FIRST
+    path = takes["folder"] / f"said{said[0]}_{len(first)}.toml"
+    path.write_text(box(said, first))
     options = InspectOptions("acc", "tacho", check_only=True)
-    return inspect_record(str(takes[real, turns][0]), load_gearbox(path), options)
+    return inspect_record(str(takes[real, turns, first][0]), load_gearbox(path), options)
 
 
-def gap_line(takes: dict, real: tuple[int, int], said: tuple[int, int], turns: int = TURNS) -> str | None:
+def gap_line(takes: dict, real: tuple[int, int], said: tuple[int, int], turns: int = TURNS, first=None) -> str | None:
+    first = first or FIRST
     chain = Chain(fs=POINTS * SPEED, speed=SPEED, tacho_shaft="input")
-    rows = takes[real, turns][1]
-    return structure_line(rows, described_pair((21, 63), (18, 54), said), 300, chain, None, {})
+    rows = takes[real, turns, first][1]
+    return structure_line(rows, described_pair(*first, said), 300, chain, None, {})
 
 
 def test_a_ringing_casing_s_healthy_box_matches_its_description(takes):
@@ -152,3 +162,44 @@ def test_a_last_pinion_a_tooth_off_is_not_read_on_the_other_stages_lines(takes):
     assert line is not None and line.startswith("stage 3 pinion: 15 teeth fit the recording, 16 described"), line
     read_as_described(inspected(takes, (15, 45), (15, 45), 2 * TURNS), SPEED, (21.0, 6.0, 5 / 3))
     assert gap_line(takes, (15, 45), (15, 45), 2 * TURNS) is None
+
+
+@pytest.mark.parametrize("said", [(16, 48), (14, 42)])
+def test_a_last_pinion_a_tooth_off_is_named_by_its_count_over_30_turns(takes, said):
+    # over 30 turns the described 16 (14) teeth's strongest family was stage 1's lines alone: 105, 231 (5, 11 x 21)
+    # within a line's tolerance of 1.778 x 59, 130, or 42, 84, 126, 168, 252 (2, 4, 6, 8, 12 x 21) on 1.556 x 27, 54,
+    # 81, 108, 162; read as a family at 21 or 42, whole on the 1/9-order shaft: 'a 189-tooth (378-tooth) pinion'.
+    # Lines on another stage's harmonics alone are no family of this one; the lines nothing else explains lie on
+    # 1.667 x k
+    report = inspected(takes, (15, 45), said)
+    assert report["matches"] is False, report["verdict"]
+    expected = f"stage 3: mesh order 1.667 measured, {said[0] / 9:.4g} expected (a 15-tooth pinion"
+    assert report["check"]["differences"][0].startswith(expected), report["check"]["differences"]
+    line = gap_line(takes, (15, 45), said)
+    assert line is not None and line.startswith(f"stage 3 pinion: 15 teeth fit the recording, {said[0]} "), line
+
+
+def test_a_last_pinion_a_tooth_more_than_described_is_named_by_its_count(takes):
+    # a 16/48 last stage described 15/45: its family was 15 (60, 105: stage 2's 10th, stage 1's 5th), 'a 135-tooth
+    # pinion'; the 16 teeth's comb holds the lines nothing else explains
+    report = inspected(takes, (16, 48), (15, 45))
+    assert report["matches"] is False, report["verdict"]
+    expected = "stage 3: mesh order 1.778 measured, 1.667 expected (a 16-tooth pinion"
+    assert report["check"]["differences"][0].startswith(expected), report["check"]["differences"]
+    line = gap_line(takes, (16, 48), (15, 45))
+    assert line is not None and line.startswith("stage 3 pinion: 16 teeth fit the recording, 15 described"), line
+    read_as_described(inspected(takes, (16, 48), (16, 48)), SPEED, (21.0, 6.0, 16 / 9))
+
+
+def test_a_two_stage_box_s_last_pinion_a_tooth_short_is_no_multiple_of_its_count(takes):
+    # 21/63 + 15/45 described 21/63 + 14/42 over 60 turns: the 14 teeth's comb meets the 15's at every 15th harmonic
+    # (70, 140) and a stray line at 56 (the 12th) made its held harmonics all multiples of 3, 'a 42-tooth pinion',
+    # while 5 x k held 22 of the 29 lines nothing else explains
+    first = FIRST[:1]
+    report = inspected(takes, (15, 45), (14, 42), 2 * TURNS, first)
+    assert report["matches"] is False, report["verdict"]
+    expected = "stage 2: mesh order 5 measured, 4.667 expected (a 15-tooth pinion"
+    assert report["check"]["differences"][0].startswith(expected), report["check"]["differences"]
+    line = gap_line(takes, (15, 45), (14, 42), 2 * TURNS, first)
+    assert line is not None and line.startswith("stage 2 pinion: 15 teeth fit the recording, 14 described"), line
+    read_as_described(inspected(takes, (15, 45), (15, 45), 2 * TURNS, first), SPEED, (21.0, 5.0))

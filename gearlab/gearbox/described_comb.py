@@ -14,8 +14,12 @@ leaves only chance lines there: the real mesh's own lines and sidebands are the 
 A stage read at M with no line there is checked against the same lines (comb_reading): M's comb seen only on
 every n-th harmonic, the others empty where it is seen, is n times the teeth (a 45/135 last stage described 15/45:
 lines at 1.667 k, k = 3, 6 ... 42, none at 4, 5, 7 ...); lines between M's harmonics on M / n's, none of another
-stage's, are z / n teeth (15/45 described 30/90 or 45/135); and a family made of other stages' harmonics alone (a
-16/48 description read on 48, 96, 105, 231, within a line's tolerance of 1.778 h) is no evidence of M.
+stage's, are z / n teeth (15/45 described 30/90 or 45/135); and a reading on a family where M's comb holds few of
+those lines is no evidence of M (a 16/48 description read on stage 1 and 2's 48, 96, 105, 231, within a line's
+tolerance of 1.778 h). A count 1-3 off whose comb holds more of them says the count before the first two rules do:
+a 15/45 stage's comb meets a 14/42 description's at every 15th of its harmonics (70, 140 ...), and with one stray
+line (56, the 12th) the held harmonics were all multiples of 3: 'a 42-tooth pinion' (a 2-stage box, 60 turns),
+while 5 x k held 22 of the 29 lines.
 """
 
 from __future__ import annotations
@@ -72,15 +76,34 @@ def comb_reading(lines: Lines, m: float, shafts, others, bin_: float, rests_on=N
       and the last held stand empty (no line at all), OWN_LINES and HELD of them at least: n times the count;
     * a comb m / n (n | z) holds OWN_LINES of them off m's harmonics and sidebands, CHANCE times what its windows there
       hold by chance: the mesh shows lines between those the description puts, z / n teeth;
-    * the reading rests on lines all on other stages' mesh harmonics (*rests_on*, or None where m's comb was weighed
-      already): no evidence of m; where m's comb holds fewer than OWN_LINES and CHANCE times chance, a count 1-3 off
-      whose comb holds them (OWN_LINES, HELD, CHANCE times chance) says it."""
+    * read on a family (*rests_on*: its lines; None where m's comb was weighed already) while m's comb holds fewer
+      than OWN_LINES, CHANCE times chance or what a count 1-3 off holds (OWN_LINES, HELD, CHANCE times chance at
+      least): that count, as it is before the first two where its comb holds more of them than theirs (module doc)."""
     x = lines.at
     tol = tol_mesh(x, bin_)
     free = ~_explained(x, others, tol) & (x <= MAX_HARMONIC * m + tol)
     if np.sum(free) < OWN_LINES:
         return None
-    xf, tf, af = x[free], tol[free], lines.amp[free]
+    xf, tf, af, index = x[free], tol[free], lines.amp[free], np.flatnonzero(free)
+    z = round(m / float(shafts[0]))
+
+    def comb(c: float) -> tuple[np.ndarray, float]:
+        return on_comb(xf, c, (), tf), float(np.sum(np.minimum(1.0, 2 * tf / c)))
+
+    meshes = [float(c) for c, *_ in others]  # m's harmonics +- theirs (a train's meshes modulate each other)
+    near = None  # (lines held, which, mesh order) of the count 1-3 off whose comb holds the most of them
+    for j in (j for j in (-3, -2, -1, 1, 2, 3) if z + j >= MIN_TEETH):
+        c = (z + j) * float(shafts[0])
+        hit, chance = comb(c)
+        if hit.any():  # refitted over its lines: the shaft's order as its sidebands read it is 0.1 % off or so
+            c = _refit(xf, af, hit, c, index)[1]
+            hit, chance = comb(c)
+        # ... not counting its harmonics +- another mesh: where that mesh is a whole harmonic of it, every line
+        # holds (a 45/135 last stage after meshes at 21 and 6 described 15/45: intermodulation at 26 = 21 + 5,
+        # 32 = 27 + 5, 52, 56 ... on the 2-order comb of 18 teeth, 8 of the 12 lines, 5's holding 3)
+        count = int(np.sum(hit & ~_beside(xf, c, meshes, tf)))
+        if count >= max(OWN_LINES, HELD * xf.size, CHANCE * chance) and (near is None or count > near[0]):
+            near = (count, hit, c)
     on_m = on_comb(xf, m, (), tf)
     held = np.round(xf[on_m] / m).astype(int)
     n = int(np.gcd.reduce(held)) if held.size >= OWN_LINES else 1
@@ -89,31 +112,27 @@ def comb_reading(lines: Lines, m: float, shafts, others, bin_: float, rests_on=N
         at = band[band % n != 0] * m
         empty = ~np.any(np.abs(x[None, :] - at[:, None]) <= tol_mesh(at, bin_)[:, None], axis=1)
         if np.sum(empty) >= OWN_LINES and np.sum(empty) >= HELD * at.size:
-            return _refit(xf, af, on_m, n * m, np.flatnonzero(free))
-    z = round(m / float(shafts[0]))
-
-    def comb(c: float) -> tuple[np.ndarray, float]:
-        return on_comb(xf, c, (), tf), float(np.sum(np.minimum(1.0, 2 * tf / c)))
-
-    meshes = [float(c) for c, *_ in others]  # m's harmonics +- theirs (a train's meshes modulate each other)
+            return _refit(xf, af, *(near[1:] if near and near[0] > held.size else (on_m, n * m)), index)
     for n in sorted((n for n in RELATED if z % n == 0 and z // n >= MIN_TEETH), reverse=True):
         hit, chance = comb(m / n)
         extra = hit & ~on_comb(xf, m, (*shafts, *meshes), tf)
         if np.sum(extra) >= OWN_LINES and np.sum(extra) >= CHANCE * chance * (1 - 1 / n):
-            return _refit(xf, af, hit, m / n, np.flatnonzero(free))
-    rests = None if rests_on is None else np.asarray(rests_on, dtype=float)
-    if rests is None or not np.all(_explained(rests, [(c, ()) for c in meshes], tol_mesh(rests, bin_))):
+            return _refit(xf, af, *(near[1:] if near and near[0] > np.sum(hit) else (hit, m / n)), index)
+    if rests_on is None:
         return None
     own, chance = comb(m)
-    if np.sum(own) >= OWN_LINES and np.sum(own) >= CHANCE * chance:
+    if near is None or (np.sum(own) >= max(OWN_LINES, CHANCE * chance) and np.sum(own) >= near[0]):
         return None
-    best = None
-    for j in (j for j in (-3, -2, -1, 1, 2, 3) if z + j >= MIN_TEETH):
-        hit, chance = comb((z + j) * float(shafts[0]))
-        count = int(np.sum(hit))
-        if count >= max(OWN_LINES, HELD * xf.size, CHANCE * chance) and (best is None or count > best[0]):
-            best = (count, hit, (z + j) * float(shafts[0]))
-    return None if best is None else _refit(xf, af, best[1], best[2], np.flatnonzero(free))
+    return _refit(xf, af, *near[1:], index)
+
+
+def _beside(x: np.ndarray, c: float, meshes, tol: np.ndarray) -> np.ndarray:
+    """Which orders *x* lie at a harmonic of *c* +- j times another mesh (j = 1 ... SIDEBANDS): its intermodulation."""
+    offsets = np.array([s * j * o for o in meshes for j in range(1, SIDEBANDS + 1) for s in (-1, 1)])
+    if not offsets.size:
+        return np.zeros(x.size, dtype=bool)
+    h = np.maximum(1, np.round((x[:, None] - offsets[None, :]) / c))
+    return np.any(np.abs(x[:, None] - h * c - offsets[None, :]) <= tol[:, None], axis=1)
 
 
 def _refit(x: np.ndarray, amp: np.ndarray, hit: np.ndarray, c: float, index: np.ndarray) -> tuple[int, float]:

@@ -257,7 +257,7 @@ def check_description(
         shared = harmonics(meshes, bin_)
         theirs = off_own(shared, look)
         o_tacho = measured_shaft[k + 1][0] if measured_shaft.get(k + 1, (0, 0, ""))[2] == "tacho" else None
-        family = mesh_family(lines, o_p, bin_, span, theirs, look, o_tacho)
+        family = mesh_family(lines, o_p, bin_, span, theirs, look, o_tacho, shared)
         if family is not None and k in ahead:
             family = ahead_family(lines, family, ahead[k], bin_, theirs)
         i = rests = None

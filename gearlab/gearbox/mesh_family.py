@@ -13,7 +13,7 @@ FAMILY_MARGIN = 0.1  # another harmonic family than the described one must hold 
 
 
 def mesh_family(
-    lines: Lines, o_p: float, bin_: float, span: float, others, expected: float, o_w: float | None = None
+    lines: Lines, o_p: float, bin_: float, span: float, others, expected: float, o_w: float | None = None, lent=()
 ) -> tuple | None:
     """(mesh order, index of its strongest harmonic, the orders of its lines) of the harmonic family
     among a stage's lines, or None: a mesh's power can sit at harmonics 4-11 with its fundamental
@@ -26,7 +26,13 @@ def mesh_family(
     family must hold FAMILY_MARGIN more of the power (even harmonics dominating are no gear of
     twice the teeth). *o_w*: the wheel shaft's order where a tacho gives it: whole teeth on it count too
     (111/157 + 115/173 with an output tacho, described with a 172-tooth last wheel: the intermediate shaft
-    read 0.6 % slow, stage 2's own family at 115.67 pinion teeth was refused and stage 1's, 158, taken)."""
+    read 0.6 % slow, stage 2's own family at 115.67 pinion teeth was refused and stage 1's, 158, taken). *lent*:
+    (order, tolerance) of the other stages' mesh harmonics: a line there that *others* leaves in (the described
+    comb has a harmonic there too) counts for the described family, for another only where a line of its own stands
+    at its order (a 15/45 last stage described 16/48 over 20 turns: stage 1's 105, 126, 231, within a line's
+    tolerance of 1.778 x 59, 71, 130, read as 5, 6, 11 x 21, 'a 189-tooth pinion'; a 16/48 one described 15/45,
+    stage 2's 60 and stage 1's 105 as 4 and 7 x 15, 'a 135-tooth pinion'; a pinion really of 135 teeth shows its line
+    at 15)."""
     top = [
         q
         for q in range(min(EVIDENCE, lines.at.size))
@@ -56,11 +62,31 @@ def mesh_family(
     # scored for every candidate at once (each row's sum and argmax are those of its own 1-D array)
     held = np.sum(power * (hits - 2 * tol / np.array(refit, dtype=float)[:, None]), axis=1).tolist()
     strongest = np.argmax(np.where(hits, lines.amp[top], -np.inf), axis=1).tolist()
-    for m, hit, p, s, n in zip(refit, hits, held, strongest, hits.sum(axis=1).tolist()):
+
+    lent_at, lent_tol = (np.array([pair[i] for pair in lent], dtype=float) for i in (0, 1))
+
+    def theirs(a: np.ndarray) -> np.ndarray:  # which orders *a* lie on another stage's mesh harmonic
+        return np.any(np.abs(a[:, None] - lent_at[None, :]) <= lent_tol[None, :], axis=1)
+
+    # a line of its own (on no other stage's mesh harmonic) within a line's tolerance of each candidate
+    mine = np.sort(lines.at[~theirs(lines.at)])
+    at = np.array(refit, dtype=float)
+    right = np.searchsorted(mine, at)
+    gap = np.minimum(
+        np.abs(at - mine[np.clip(right - 1, 0, None)]) if mine.size else np.inf,
+        np.abs(mine[np.clip(right, None, mine.size - 1)] - at) if mine.size else np.inf,
+    )
+    shown = (gap <= tol_mesh(at, bin_)).tolist()
+    mine_x = ~theirs(x)
+    for m, hit, p, s, seen in zip(refit, hits, held, strongest, shown):
         whole = [
             o for o in (o_p, o_w) if o and 6 <= m / o <= 1000 and abs(m / o - round(m / o)) * o <= tol_mesh(m, bin_)
         ]
-        if n >= 2 and (whole or m / o_p >= 6):
+        if not seen and not np.all(hit <= mine_x):  # without a line at its order, its own lines alone
+            hit = hit & mine_x
+            p = float(np.sum(power * (hit - 2 * tol / m)))
+            s = int(np.argmax(np.where(hit, lines.amp[top], -np.inf)))
+        if np.sum(hit) >= 2 and (whole or m / o_p >= 6):
             fits.append(((p, m, top[s], x[hit]), hit, bool(whole)))
     # The strongest family, whole teeth or not: a family of whole teeth whose power is mostly that family's lines
     # and which is slower is its subharmonic or borrows them; it is no mesh of its own (a 21/65 + 34/91 box described
