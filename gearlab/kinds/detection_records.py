@@ -76,11 +76,10 @@ class UnitShaft:
     ratio: Fraction
     gear: str
 
-    def revolutions(self, revs: np.ndarray, max_order: float | None = None) -> np.ndarray:
-        """This shaft's complete revolutions from a record's consecutive input revolutions *revs*
-        (no input order above *max_order*: signals.shaft), the input shaft's own content out first
-        (without_input_shaft)."""
-        return unit_revolutions(revs, self.ratio.numerator, self.ratio.denominator, max_order)
+    def revolutions(self, revs: np.ndarray, max_order: float | None = None, first: int = 0) -> np.ndarray:
+        """This shaft's complete revolutions from a record's consecutive input revolutions *revs*, the
+        first its input revolution *first* (unit_revolutions)."""
+        return unit_revolutions(revs, self.ratio.numerator, self.ratio.denominator, max_order, first=first)
 
     def said(self) -> str:
         return f"the {self.name} shaft ({self.gear}; {float(self.ratio):.4g} turns per input turn)"
@@ -107,13 +106,18 @@ def without_input_shaft(revs: np.ndarray, p: int, q: int) -> np.ndarray:
     return without_input_orders(revs, p).astype(revs.dtype)
 
 
-def unit_revolutions(revs: np.ndarray, p: int, q: int, max_order: float | None, input_out: bool = True) -> np.ndarray:
-    """The revolutions of a shaft turning p/q per input turn from a record's consecutive input
-    revolutions *revs* (signals.shaft), with the input shaft's own content taken out first
-    (*input_out*: without_input_shaft; a run made before it: False, as `gearlab score` reads it)."""
+def unit_revolutions(
+    revs: np.ndarray, p: int, q: int, max_order: float | None, input_out: bool = True, first: int = 0
+) -> np.ndarray:
+    """The revolutions of a shaft turning p/q per input turn from a record's consecutive input revolutions *revs*
+    (signals.shaft), with the input shaft's own content taken out first (*input_out*: without_input_shaft; a run
+    made before it: False, as `gearlab score` reads it). *first*: revs[0]'s number from the take's angle zero
+    (CutRecording.first_revolution): the shaft's turns counted from that zero, as the source's rows' are
+    (data.builder.shaft_row), a take whose first revolutions are left out (a run-up's, a start-up's) is cut into
+    the same turns as whole."""
     if input_out:
         revs = without_input_shaft(revs, p, q)
-    return shaft_revolutions(revs, p / q, 0.0, revs.shape[-1], max_order)
+    return shaft_revolutions(revs, p / q, (first * p % q) / q, revs.shape[-1], max_order)
 
 
 def unit_shaft(source: DatasetSpec) -> UnitShaft | None:
@@ -423,7 +427,10 @@ def read_target(
         cond["unit_max_order"] = cond["max_order"] if shaft is None else int(cond["max_order"] / shaft.ratio)
         if shaft is not None:  # the units: that shaft's revolutions, in the records' band
             for role in ROLES:
-                cond[role] = [(f, shaft.revolutions(r, cond["max_order"])) for f, r in cond[role]]
+                cond[role] = [
+                    (f, shaft.revolutions(r, cond["max_order"], records[f.path].first_revolution))
+                    for f, r in cond[role]
+                ]
         if not any(len(r) for _, r in cond["history"]):  # not one turn of the units' shaft (a slow output, short takes)
             raise GearlabInputError(too_few_units(where, name, cond, shaft, 0, "revolution"))
         standardiser = Standardiser.fit(np.concatenate([r for _, r in cond["history"]]))

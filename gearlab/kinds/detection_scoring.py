@@ -574,7 +574,7 @@ def score(
             if "unit_shaft" in meta:  # the run's units: revolutions of the watched gear's shaft, in its band
                 _, p, q = meta["unit_shaft"]
                 band = meta["conditions"][name]["max_order"]
-                revs = unit_revolutions(revs, p, q, band, meta.get("input_shaft_out", False))
+                revs = unit_revolutions(revs, p, q, band, meta.get("input_shaft_out", False), rec.first_revolution)
             if scored_on:
                 scored_on = _units_of_part(meta, str(file), scored_on, len(revs))
             # a run-up scored in band: its speed source's words say the span, not that its mean speed is its condition
